@@ -1,0 +1,20 @@
+# Third-party dependencies, all from Debian 12 packages (see scripts/install-deps.sh).
+find_package(Eigen3 3.4 REQUIRED NO_MODULE)
+find_package(HDF5 REQUIRED COMPONENTS C)
+find_package(spdlog REQUIRED)
+find_package(CLI11 REQUIRED CONFIG)
+find_package(nlohmann_json 3.10 REQUIRED)
+find_package(OpenSSL REQUIRED COMPONENTS Crypto)
+find_package(OpenCV REQUIRED COMPONENTS core imgproc imgcodecs)
+find_package(OpenMP REQUIRED COMPONENTS CXX)
+find_package(Threads REQUIRED)
+# ITK (with GDCM) only for medical image I/O, confined to preprocess/src/*reader*.cpp.
+find_package(ITK 5.2 REQUIRED COMPONENTS ITKCommon ITKIOImageBase ITKIOGDCM ITKIONIFTI ITKIONRRD ITKIOMeta ITKGDCM
+             ITKConnectedComponents ITKBinaryMathematicalMorphology ITKLabelMap ITKThresholding ITKImageGrid)
+find_package(GDCM REQUIRED)
+if(CTSURG_BUILD_TESTS)
+  find_package(GTest REQUIRED)
+endif()
+if(CTSURG_BUILD_BENCH)
+  find_package(benchmark REQUIRED)
+endif()

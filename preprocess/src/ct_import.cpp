@@ -1,0 +1,110 @@
+#include "ctsurg/preprocess/ct_import.h"
+
+#include "ctsurg/core/error.h"
+#include "ctsurg/preprocess/image_file_reader.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+
+namespace fs = std::filesystem;
+
+namespace ctsurg {
+
+std::vector<fs::path> detached_data_files(const fs::path& header) {
+  const ImageFileFormat format = image_file_format(header);
+  if (format == ImageFileFormat::Nifti) return {};
+  const bool nrrd = format == ImageFileFormat::Nrrd;
+  std::ifstream in(header);
+  std::string line;
+  std::vector<fs::path> files;
+  const fs::path base = header.parent_path();
+  bool list = false;
+  while (std::getline(in, line)) {
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    if (list) {
+      if (!line.empty()) files.push_back(base / line);
+      continue;
+    }
+    if (line.empty()) {
+      if (nrrd) break;  // end of a NRRD header
+      continue;
+    }
+    const auto sep = line.find(nrrd ? ':' : '=');
+    if (sep == std::string::npos) continue;
+    std::string key = line.substr(0, sep);
+    while (!key.empty() && key.back() == ' ') key.pop_back();
+    if (nrrd ? (key != "data file" && key != "datafile") : key != "ElementDataFile") continue;
+    std::istringstream value(line.substr(sep + 1));
+    std::string first;
+    value >> first;
+    if (first == "LIST") {
+      list = true;
+      continue;
+    }
+    if (first == "LOCAL") break;
+    long lo = 0, hi = 0, step = 0;
+    if (value >> lo >> hi >> step && step != 0) {
+      for (long n = lo; step > 0 ? n <= hi : n >= hi; n += step) {
+        char name[4096];
+        std::snprintf(name, sizeof name, first.c_str(), n);
+        files.push_back(base / name);
+      }
+    } else {
+      files.push_back(base / first);
+    }
+    if (!nrrd) break;  // ElementDataFile is the last MetaImage header field
+  }
+  return files;
+}
+
+CtImport import_ct(const fs::path& input, const CtImportOptions& options) {
+  CtImport out;
+  if (!fs::exists(input)) throw InputError(input.string(), "", "does not exist");
+  if (fs::is_directory(input)) {
+    if (options.rescale_slope || options.rescale_intercept) {
+      throw InputError(input.string(), "--rescale-slope/--rescale-intercept",
+                       "DICOM carries its own RescaleSlope/RescaleIntercept; these options are for other formats");
+    }
+    DicomVolume d = read_dicom_series(input, options.dicom);
+    out.volume.hu = std::move(d.hu);
+    out.volume.source = std::move(d.source);
+    out.files = std::move(d.files);
+    out.warnings = std::move(d.warnings);
+  } else {
+    out.volume.hu = read_image_file(input, &out.warnings);
+    const ImageFileFormat format = image_file_format(input);
+    out.volume.source = {{"format", format == ImageFileFormat::Nifti  ? "nifti"
+                                    : format == ImageFileFormat::Nrrd ? "nrrd"
+                                                                      : "metaimage"},
+                         {"file", input.filename().string()}};
+    out.files.push_back(input);
+    for (const auto& f : detached_data_files(input)) {
+      if (fs::exists(f)) out.files.push_back(f);
+    }
+    if (options.rescale_slope || options.rescale_intercept) {
+      const double slope = options.rescale_slope.value_or(1.0), intercept = options.rescale_intercept.value_or(0.0);
+      if (!std::isfinite(slope) || slope == 0.0) throw InputError(input.string(), "--rescale-slope", "must be finite and non-zero");
+      for (float& v : out.volume.hu.voxels) v = static_cast<float>(v * slope + intercept);
+      out.volume.source["rescale"] = {{"slope", slope}, {"intercept", intercept}};
+    }
+  }
+  const auto [lo, hi] = std::minmax_element(out.volume.hu.voxels.begin(), out.volume.hu.voxels.end());
+  out.volume.source["hu_min"] = *lo;
+  out.volume.source["hu_max"] = *hi;
+  if (*lo >= 0.0f && *hi > 1500.0f) {
+    std::ostringstream m;
+    m << "values span [" << *lo << ", " << *hi
+      << "] with no negative value: air should be about -1000 HU; are these raw stored values? "
+         "(--rescale-intercept -1024 converts the usual offset)";
+    out.warnings.push_back(m.str());
+  }
+  if (!out.volume.hu.geometry.is_orthonormal(1e-4) && out.volume.source.value("gantry_tilt_deg", 0.0) <= 0.01) {
+    out.warnings.push_back("the direction matrix is not orthonormal (sheared lattice)");
+  }
+  return out;
+}
+
+}  // namespace ctsurg

@@ -1,0 +1,248 @@
+// ITK is confined to this file (and the other *_reader/*_writer sources): it returns plain volumes.
+// ITK headers come first: they carry their own Eigen copy, which must be seen before ctsurg's
+// headers pull in the system Eigen (see docs/architecture.md, "ITK and Eigen").
+#include <itkImage.h>
+#include <itkImageFileReader.h>
+#include <itkImageIOBase.h>
+#include <itkMetaImageIO.h>
+#include <itkNiftiImageIO.h>
+#include <itkNrrdImageIO.h>
+
+#include "ctsurg/preprocess/image_file_reader.h"
+
+#include "ctsurg/core/error.h"
+#include "ctsurg/core/memory_guard.h"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <fstream>
+#include <sstream>
+
+namespace fs = std::filesystem;
+
+namespace ctsurg {
+
+namespace {
+
+std::string lower(std::string s) {
+  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return s;
+}
+
+bool ends_with(const std::string& s, const std::string& suffix) {
+  return s.size() >= suffix.size() && s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
+}
+
+itk::ImageIOBase::Pointer make_io(ImageFileFormat format) {
+  switch (format) {
+    case ImageFileFormat::Nifti: return itk::NiftiImageIO::New().GetPointer();
+    case ImageFileFormat::Nrrd: return itk::NrrdImageIO::New().GetPointer();
+    case ImageFileFormat::MetaImage: return itk::MetaImageIO::New().GetPointer();
+  }
+  return nullptr;
+}
+
+// ITK exception text is long and repeats the location; keep its description only.
+std::string itk_reason(const itk::ExceptionObject& e) {
+  std::string d = e.GetDescription();
+  while (!d.empty() && (d.back() == '\n' || d.back() == ' ')) d.pop_back();
+  return d;
+}
+
+void check_file(const fs::path& path) {
+  if (!fs::exists(path)) throw InputError(path.string(), "", "file does not exist");
+  if (fs::is_directory(path)) throw InputError(path.string(), "", "is a folder; a DICOM series folder is read by ctsurg-import");
+  if (fs::file_size(path) == 0) throw InputError(path.string(), "", "file is empty");
+}
+
+ImageGeometry geometry_from(const itk::ImageIOBase& io, const fs::path& path) {
+  if (io.GetNumberOfDimensions() < 2 || io.GetNumberOfDimensions() > 4) {
+    throw InputError(path.string(), "dimensions",
+                     "expected a 3D image, found " + std::to_string(io.GetNumberOfDimensions()) + " dimensions");
+  }
+  ImageGeometry g;
+  const unsigned n = std::min(3u, io.GetNumberOfDimensions());
+  for (unsigned a = 0; a < n; ++a) {
+    g.dims[a] = static_cast<int64_t>(io.GetDimensions(a));
+    g.spacing[a] = io.GetSpacing(a);
+    g.origin[a] = io.GetOrigin(a);
+    const auto dir = io.GetDirection(a);
+    for (unsigned r = 0; r < n; ++r) g.direction(r, a) = dir[r];
+  }
+  if (n == 2) {
+    g.dims[2] = 1;
+    g.direction.col(2) = g.direction.col(0).cross(g.direction.col(1));
+  }
+  if (io.GetNumberOfDimensions() == 4 && io.GetDimensions(3) > 1) {
+    throw InputError(path.string(), "dimensions",
+                     "4D image with " + std::to_string(io.GetDimensions(3)) + " time points; expected one 3D volume");
+  }
+  for (int a = 0; a < 3; ++a) {
+    if (!(g.spacing[a] > 0.0) || !std::isfinite(g.spacing[a])) {
+      std::ostringstream s;
+      s << "voxel spacing along axis " << a << " must be a positive number of mm, got " << g.spacing[a];
+      throw InputError(path.string(), "spacing", s.str());
+    }
+  }
+  g.validate(path.string());
+  return g;
+}
+
+// A NRRD header that names a "space" must give "space directions", not "spacings" (NRRD format
+// spec, "spacings" field). Some exporters write both; ITK then refuses the file. Such a header is
+// rewritten to a temporary copy with "space directions" built from the spacings and absolute data
+// file names; the copy is removed when this object dies.
+class RepairedNrrdHeader {
+ public:
+  RepairedNrrdHeader(const fs::path& header, std::vector<std::string>* warnings) {
+    std::ifstream in(header, std::ios::binary);
+    std::vector<std::string> lines;
+    std::string line;
+    bool has_space = false, has_spacings = false, has_directions = false;
+    std::string spacings;
+    while (std::getline(in, line)) {
+      if (!line.empty() && line.back() == '\r') line.pop_back();
+      if (line.empty()) break;  // attached data follows: nothing to repair safely
+      const auto colon = line.find(':');
+      const std::string key = colon == std::string::npos ? "" : line.substr(0, colon);
+      if (key == "space") has_space = true;
+      if (key == "space directions") has_directions = true;
+      if (key == "spacings") {
+        has_spacings = true;
+        spacings = line.substr(colon + 1);
+      }
+      lines.push_back(line);
+    }
+    const bool detached = !in.good() || in.peek() == EOF;
+    if (!(has_space && has_spacings && !has_directions && detached)) return;
+    std::istringstream sp(spacings);
+    std::vector<double> s;
+    double v;
+    while (sp >> v) s.push_back(v);
+    if (s.size() != 3) return;
+    std::ostringstream out;
+    for (const auto& l : lines) {
+      const std::string key = l.substr(0, l.find(':'));
+      if (key == "spacings") {
+        continue;  // replaced by space directions, which must follow the space line
+      } else if (key == "space") {
+        out << "space: left-posterior-superior\n";
+        out << "space directions: (" << s[0] << ",0,0) (0," << s[1] << ",0) (0,0," << s[2] << ")\n";
+      } else if (key == "data file" || key == "datafile") {
+        std::string value = l.substr(l.find(':') + 1);
+        value.erase(0, value.find_first_not_of(' '));
+        if (value.rfind("LIST", 0) == 0) return;  // a list follows; leave the header alone
+        out << "data file: " << (header.parent_path().empty() ? fs::current_path() : fs::absolute(header.parent_path())).string()
+            << "/" << value << "\n";
+      } else {
+        out << l << "\n";
+      }
+    }
+    static std::atomic<int> counter{0};
+    path_ = fs::temp_directory_path() / ("ctsurg-nrrd-" + std::to_string(::getpid()) + "-" + std::to_string(counter++) +
+                                         "-" + header.filename().string());
+    std::ofstream(path_) << out.str() << "\n";
+    if (warnings) {
+      warnings->push_back("NRRD header gives 'spacings' together with 'space' (not allowed by the NRRD format): read as "
+                          "an axis-aligned LPS volume with spacings" + spacings + " mm and origin 0; patient orientation is "
+                          "not recorded in this file");
+    }
+  }
+  ~RepairedNrrdHeader() {
+    if (!path_.empty()) {
+      std::error_code ec;
+      fs::remove(path_, ec);
+    }
+  }
+  const fs::path& path() const { return path_; }
+
+ private:
+  fs::path path_;
+};
+
+ImageFileInfo read_info_from(const fs::path& readable, const fs::path& path, ImageFileFormat format) {
+  auto io = make_io(format);
+  if (!io->CanReadFile(readable.c_str())) {
+    throw InputError(path.string(), "header", "not a readable " + lower(io->GetNameOfClass()) + " file (corrupt header?)");
+  }
+  io->SetFileName(readable.string());
+  try {
+    io->ReadImageInformation();
+  } catch (const itk::ExceptionObject& e) {
+    throw InputError(path.string(), "header", itk_reason(e));
+  }
+  if (io->GetNumberOfComponents() != 1) {
+    throw InputError(path.string(), "components",
+                     "expected a scalar image, found " + std::to_string(io->GetNumberOfComponents()) + " components per voxel");
+  }
+  ImageFileInfo info;
+  info.geometry = geometry_from(*io, path);
+  info.component_type = itk::ImageIOBase::GetComponentTypeAsString(io->GetComponentType());
+  info.components = static_cast<int>(io->GetNumberOfComponents());
+  return info;
+}
+
+}  // namespace
+
+ImageFileFormat image_file_format(const fs::path& path) {
+  const std::string name = lower(path.filename().string());
+  if (ends_with(name, ".nii") || ends_with(name, ".nii.gz")) return ImageFileFormat::Nifti;
+  if (ends_with(name, ".nrrd") || ends_with(name, ".nhdr")) return ImageFileFormat::Nrrd;
+  if (ends_with(name, ".mha") || ends_with(name, ".mhd")) return ImageFileFormat::MetaImage;
+  throw InputError(path.string(), "file name",
+                   "unknown image format; expected .nii, .nii.gz, .nrrd, .nhdr, .mha, .mhd or a DICOM folder");
+}
+
+ImageFileInfo read_image_file_info(const fs::path& path, std::vector<std::string>* warnings) {
+  const ImageFileFormat format = image_file_format(path);
+  check_file(path);
+  if (format == ImageFileFormat::Nrrd) {
+    const RepairedNrrdHeader repaired(path, warnings);
+    if (!repaired.path().empty()) return read_info_from(repaired.path(), path, format);
+  }
+  return read_info_from(path, path, format);
+}
+
+Volume<float> read_image_file(const fs::path& path, std::vector<std::string>* warnings) {
+  const ImageFileFormat format = image_file_format(path);
+  check_file(path);
+  const RepairedNrrdHeader repaired(format == ImageFileFormat::Nrrd ? path : fs::path(), nullptr);
+  const fs::path readable = repaired.path().empty() ? path : repaired.path();
+  const ImageFileInfo info = read_image_file_info(path, warnings);
+  const int64_t count = info.geometry.voxel_count();
+  // The reader holds the file's own type and our float copy at the same time.
+  check_allocation(static_cast<uint64_t>(count), sizeof(float) * 2, path.string(), "dimensions");
+
+  using Image = itk::Image<float, 3>;
+  auto reader = itk::ImageFileReader<Image>::New();
+  reader->SetImageIO(make_io(format));
+  reader->SetFileName(readable.string());
+  try {
+    reader->Update();
+  } catch (const itk::ExceptionObject& e) {
+    throw InputError(path.string(), "voxel data", itk_reason(e));
+  }
+  const Image* image = reader->GetOutput();
+  Volume<float> v;
+  v.geometry = info.geometry;
+  const auto region = image->GetLargestPossibleRegion();
+  if (static_cast<int64_t>(region.GetNumberOfPixels()) != count) {
+    throw InputError(path.string(), "voxel data", "voxel count does not match the header");
+  }
+  v.voxels.assign(image->GetBufferPointer(), image->GetBufferPointer() + count);
+  for (int64_t n = 0; n < count; ++n) {
+    if (!std::isfinite(v.voxels[static_cast<std::size_t>(n)])) {
+      const int64_t i = n % v.geometry.dims[0], j = (n / v.geometry.dims[0]) % v.geometry.dims[1],
+                    k = n / (v.geometry.dims[0] * v.geometry.dims[1]);
+      throw InputError(path.string(), "voxel data",
+                       "non-finite value (NaN or infinity) at voxel (" + std::to_string(i) + ", " + std::to_string(j) +
+                           ", " + std::to_string(k) + ")");
+    }
+  }
+  return v;
+}
+
+}  // namespace ctsurg

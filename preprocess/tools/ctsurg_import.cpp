@@ -1,0 +1,47 @@
+// ctsurg-import INPUT OUTPUT.h5: CT (DICOM series folder, NIfTI, NRRD, MetaImage) to an HU volume.
+#include "ctsurg/core/atomic_output.h"
+#include "ctsurg/core/hu_volume_file.h"
+#include "ctsurg/core/provenance.h"
+#include "ctsurg/core/tool_app.h"
+#include "ctsurg/core/version.h"
+#include "ctsurg/preprocess/ct_import.h"
+
+#include <spdlog/spdlog.h>
+
+int main(int argc, char** argv) {
+  std::string input, output, uneven = "resample";
+  double slope = 0, intercept = 0;
+  ctsurg::CtImportOptions options;
+  CLI::Option *slope_opt = nullptr, *intercept_opt = nullptr;
+  return ctsurg::run_tool(
+      argc, argv, "ctsurg-import",
+      "Import a CT scan (DICOM series folder, NIfTI .nii/.nii.gz, NRRD .nrrd/.nhdr, MetaImage .mha/.mhd) as an HU "
+      "volume in LPS millimetres (ctsurg HDF5 + XDMF sidecar).",
+      [&](CLI::App& app) {
+        app.add_option("input", input, "CT file or DICOM series folder")->required();
+        app.add_option("output", output, "HU volume file to write (.h5)")->required();
+        app.add_option("--series", options.dicom.series,
+                       "DICOM SeriesInstanceUID or SeriesNumber, when the folder holds several series");
+        app.add_option("--uneven-slices", uneven,
+                       "Unevenly spaced DICOM slices: 'resample' to even slices at the smallest gap, or 'keep' the "
+                       "acquired slices on the mean step (dcm2niix's layout)")
+            ->check(CLI::IsMember({"resample", "keep"}));
+        slope_opt = app.add_option("--rescale-slope", slope, "Non-DICOM input: HU = value x slope + intercept");
+        intercept_opt = app.add_option("--rescale-intercept", intercept, "Non-DICOM input: HU = value x slope + intercept");
+      },
+      [&](const ctsurg::ToolContext& ctx) {
+        options.dicom.uneven = uneven == "keep" ? ctsurg::UnevenSlicePolicy::Keep : ctsurg::UnevenSlicePolicy::Resample;
+        if (*slope_opt) options.rescale_slope = slope;
+        if (*intercept_opt) options.rescale_intercept = intercept;
+        ctsurg::check_output_path(output);
+        const ctsurg::CtImport ct = ctsurg::import_ct(input, options);
+        for (const auto& w : ct.warnings) spdlog::warn("{}: {}", input, w);
+        ctsurg::Provenance provenance{ctx.name, ctsurg::kVersion, ctx.command_line, {}, nlohmann::json::array()};
+        for (const auto& f : ct.files) provenance.add_input(f);
+        ctsurg::write_hu_volume_file(output, ct.volume, provenance);
+        const auto& g = ct.volume.hu.geometry;
+        spdlog::info("{}: {} x {} x {} voxels of {:.4g} x {:.4g} x {:.4g} mm, HU {} .. {}", output, g.dims[0], g.dims[1],
+                     g.dims[2], g.spacing[0], g.spacing[1], g.spacing[2], ct.volume.source["hu_min"].dump(),
+                     ct.volume.source["hu_max"].dump());
+      });
+}

@@ -1,0 +1,32 @@
+#!/usr/bin/env bash
+# Installs everything ctsurg needs on Debian 12 (bookworm) from Debian's own packages.
+# Safe to rerun; uses sudo only when not already root. CTSURG_SKIP_APT=1 skips it (packaged builds).
+set -euo pipefail
+[[ "${CTSURG_SKIP_APT:-0}" == 1 ]] && exit 0
+
+packages=(
+  # toolchain
+  build-essential cmake ninja-build pkg-config git
+  # libraries (docs/architecture.md says which stage uses which)
+  libeigen3-dev libhdf5-dev libinsighttoolkit5-dev libgdcm-dev libopencv-dev libcgal-dev libassimp-dev
+  libosmesa6-dev libcli11-dev libspdlog-dev nlohmann-json3-dev libyaml-cpp-dev libssl-dev zlib1g-dev
+  # tests and benchmarks; dcm2niix and python3-nibabel/vtk9 are the peers we validate against
+  libgtest-dev libgmock-dev libbenchmark-dev dcm2niix libgdcm-tools python3 python3-numpy python3-nibabel
+  python3-vtk9 time
+)
+
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if ((${#missing[@]} == 0)); then
+  echo "install-deps: all ${#packages[@]} packages present"
+  exit 0
+fi
+SUDO=""
+[[ $(id -u) -ne 0 ]] && SUDO="sudo"
+echo "install-deps: installing ${#missing[@]} packages: ${missing[*]}"
+export DEBIAN_FRONTEND=noninteractive
+$SUDO apt-get update -qq
+$SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+echo "install-deps: done"
