@@ -1,12 +1,12 @@
 #!/usr/bin/env bash
 # Generates the standard synthetic phantom set (data_samples/phantoms/README.md) with ctsurg-phantom.
-# Usage: scripts/make-phantoms.sh [OUT_DIR]   (default out/phantoms; the tool is taken from
+# Usage: scripts/make-phantoms.sh [OUT_DIR]   (default build/phantoms; the tool is taken from
 # $CTSURG_BIN, default build/bin). Deterministic: rerunning gives byte-identical files.
 set -euo pipefail
 
 cd "$(dirname "$0")/.."
 bin="${CTSURG_BIN:-build/bin}"
-out="${1:-out/phantoms}"
+out="${1:-build/phantoms}"
 tool="$bin/ctsurg-phantom"
 if [[ ! -x "$tool" ]]; then
   echo "make-phantoms.sh: $tool not found; build it (ninja -C build ctsurg-phantom) or set CTSURG_BIN" >&2

@@ -76,8 +76,10 @@ AtomicOutput::AtomicOutput(fs::path final_path) : final_(std::move(final_path)) 
   check_output_path(final_);
   fs::path parent = final_.parent_path();
   if (parent.empty()) parent = ".";
-  temp_ = parent / ("." + final_.filename().string() + ".tmp-" + std::to_string(::getpid()) + "-" +
-                    std::to_string(g_counter.fetch_add(1)));
+  // The temporary name ends with the final name, so libraries that pick a format from the suffix
+  // (ITK, OpenCV, niftilib's .gz) write the right thing to it.
+  temp_ = parent / (".tmp-" + std::to_string(::getpid()) + "-" + std::to_string(g_counter.fetch_add(1)) + "-" +
+                    final_.filename().string());
   slot_ = register_temporary(temp_);
 }
 

@@ -1,5 +1,4 @@
 // GDCM (header scan) and ITK (pixel decoding) are confined to this file.
-// ITK headers come first: they carry their own Eigen copy (see image_file_reader.cpp).
 #include <itkGDCMImageIO.h>
 #include <itkImage.h>
 #include <itkImageFileReader.h>

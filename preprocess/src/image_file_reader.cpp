@@ -1,6 +1,5 @@
 // ITK is confined to this file (and the other *_reader/*_writer sources): it returns plain volumes.
-// ITK headers come first: they carry their own Eigen copy, which must be seen before ctsurg's
-// headers pull in the system Eigen (see docs/architecture.md, "ITK and Eigen").
+// ITK_USE_SYSTEM_EIGEN (preprocess/CMakeLists.txt) makes ITK use the same Eigen as ctsurg.
 #include <itkImage.h>
 #include <itkImageFileReader.h>
 #include <itkImageIOBase.h>

@@ -1,6 +1,4 @@
 // ITK is confined to this file: callers hand over plain volumes.
-// ITK headers come first: they carry their own Eigen copy, which must be seen before ctsurg's
-// headers pull in the system Eigen (see image_file_reader.cpp).
 #include <itkImage.h>
 #include <itkImageFileWriter.h>
 #include <itkImageIOBase.h>
@@ -68,15 +66,6 @@ std::string itk_reason(const itk::ExceptionObject& e) {
   return d;
 }
 
-// Removes the suffixed temporary file if the write fails before it was renamed.
-struct RemoveOnExit {
-  fs::path path;
-  ~RemoveOnExit() {
-    std::error_code ec;
-    if (!path.empty()) fs::remove(path, ec);
-  }
-};
-
 template <class T>
 void write_typed(const Volume<T>& volume, const fs::path& path) {
   const WritableFormat format = writable_format(path);
@@ -111,23 +100,16 @@ void write_typed(const Volume<T>& volume, const fs::path& path) {
                               false);
   image->SetPixelContainer(container);
 
-  AtomicOutput out(path);
-  // ITK and niftilib choose the format (and gzip) from the name, so the file is first written under
-  // AtomicOutput's temporary name plus the real suffix, then moved onto that temporary name.
-  RemoveOnExit suffixed{fs::path(out.temp_path().string() + format.suffix)};
+  AtomicOutput out(path);  // its temporary name keeps the suffix that ITK picks the format from
   auto writer = itk::ImageFileWriter<Image>::New();
   writer->SetImageIO(format.io);
-  writer->SetFileName(suffixed.path.string());
+  writer->SetFileName(out.temp_path().string());
   writer->SetInput(image);
   try {
     writer->Update();
   } catch (const itk::ExceptionObject& e) {
     throw RuntimeError(path.string() + ": cannot write image: " + itk_reason(e));
   }
-  std::error_code ec;
-  fs::rename(suffixed.path, out.temp_path(), ec);
-  if (ec) throw RuntimeError(path.string() + ": cannot rename the temporary image: " + ec.message());
-  suffixed.path.clear();
   out.commit();
 }
 

@@ -1,5 +1,4 @@
-// ITK is confined to this file: it takes and returns ctsurg volumes. ITK headers come first (they
-// carry their own Eigen copy, which must be seen before ctsurg's headers pull in the system Eigen).
+// ITK is confined to this file: it takes and returns ctsurg volumes.
 #include <itkBinaryBallStructuringElement.h>
 #include <itkBinaryFillholeImageFilter.h>
 #include <itkBinaryMorphologicalClosingImageFilter.h>

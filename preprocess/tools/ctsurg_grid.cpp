@@ -8,6 +8,7 @@
 #include "ctsurg/core/tool_app.h"
 #include "ctsurg/core/version.h"
 #include "ctsurg/preprocess/image_file_reader.h"
+#include "ctsurg/preprocess/label_resampling.h"
 #include "ctsurg/preprocess/mask_cleanup.h"
 #include "ctsurg/preprocess/occupancy_downsampling.h"
 #include "ctsurg/preprocess/preview_montage.h"
@@ -145,12 +146,27 @@ int main(int argc, char** argv) {
         ctsurg::Volume<uint16_t> mask;
         if (by_mask) {
           const ctsurg::Volume<float> labels = read_mask_volume(mask_path);
-          if (!labels.geometry.same_lattice(g)) {
-            throw ctsurg::InputError(mask_path.string(), "geometry",
-                                     "not on the CT's lattice: mask " + format_geometry(labels.geometry) + "; CT " +
-                                         format_geometry(g));
-          }
           mask = ctsurg::select_labels(labels, ids, mask_path.string());
+          if (!labels.geometry.same_lattice(g)) {
+            // Same voxels in another index order (e.g. rows flipped) resample exactly; anything else
+            // is nearest-neighbour and reported.
+            const int64_t before = ctsurg::count_tissue_voxels(mask);
+            auto resampled = ctsurg::resample_labels_nearest(mask, g);
+            if (ctsurg::count_tissue_voxels(resampled.labels) == 0 && before > 0) {
+              throw ctsurg::InputError(mask_path.string(), "geometry",
+                                       "the selected tissue lies outside the CT: mask " + format_geometry(labels.geometry) +
+                                           "; CT " + format_geometry(g));
+            }
+            if (!resampled.exact()) {
+              spdlog::warn("{}: not on the CT's voxels (mask {}; CT {}): labels resampled to the CT by nearest "
+                           "neighbour, voxel centres up to {:.3g} mm apart",
+                           mask_path.string(), format_geometry(labels.geometry), format_geometry(g),
+                           resampled.max_offset_mm);
+            } else {
+              spdlog::info("{}: same voxels as the CT in another index order; reordered exactly", mask_path.string());
+            }
+            mask = std::move(resampled.labels);
+          }
           for (const auto id : ids) {
             if (std::find(mask.voxels.begin(), mask.voxels.end(), id) == mask.voxels.end()) {
               spdlog::warn("{}: label {} does not occur", mask_path.string(), id);

@@ -147,6 +147,40 @@ TEST(CtsurgGrid, CellsSmallerThanVoxelsWarnButWork) {
   EXPECT_NE(r.output.find("smaller than the CT voxel spacing"), std::string::npos) << r.output;
 }
 
+TEST(CtsurgGrid, MaskInAnotherIndexOrderIsReorderedExactlyAndAShiftedOneWarns) {
+  TempDir dir;
+  const fs::path ct = write_ct(dir);
+  const auto reference = run_tool("ctsurg-grid", {ct.string(), write_labels(dir, ct_geometry(), "labels.h5").string(),
+                                                  (dir / "a.h5").string(), "--voxel-mm", "3", "--no-preview"});
+  ASSERT_EQ(reference.exit_code, 0) << reference.output;
+  // The same voxels stored with the rows flipped (as NIfTI exporters write DICOM-derived masks).
+  ctsurg::HuVolume flipped;
+  flipped.hu = ctsurg::Volume<float>(ct_geometry(), 0.0f);
+  auto& fg = flipped.hu.geometry;
+  fg.origin = ct_geometry().index_to_world({0, double(fg.dims[1] - 1), 0});
+  fg.direction.col(1) *= -1.0;
+  const auto g = ct_geometry();
+  for (int64_t k = 0; k < g.dims[2]; ++k)
+    for (int64_t j = 0; j < g.dims[1]; ++j)
+      for (int64_t i = 0; i < g.dims[0]; ++i)
+        if (radius_at(g, i, j, k) <= kRadiusMm) flipped.hu(i, g.dims[1] - 1 - j, k) = i < 19 ? 2.0f : 3.0f;
+  ctsurg::write_hu_volume_file(dir / "flipped.h5", flipped, test_provenance());
+  const auto r = run_tool("ctsurg-grid", {ct.string(), (dir / "flipped.h5").string(), (dir / "b.h5").string(),
+                                          "--voxel-mm", "3", "--no-preview"});
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("reordered exactly"), std::string::npos) << r.output;
+  const auto a = ctsurg::read_occupancy_grid_file(dir / "a.h5"), b = ctsurg::read_occupancy_grid_file(dir / "b.h5");
+  EXPECT_EQ(a.mask.voxels, b.mask.voxels);
+  EXPECT_EQ(a.fraction.voxels, b.fraction.voxels);
+  // Half a voxel off: nearest neighbour with a warning that gives the distance.
+  ctsurg::ImageGeometry half = ct_geometry();
+  half.origin[0] += 0.75;
+  const auto w = run_tool("ctsurg-grid", {ct.string(), write_labels(dir, half, "half.h5").string(), (dir / "c.h5").string(),
+                                          "--voxel-mm", "3", "--no-preview"});
+  ASSERT_EQ(w.exit_code, 0) << w.output;
+  EXPECT_NE(w.output.find("nearest neighbour, voxel centres up to 0.75 mm apart"), std::string::npos) << w.output;
+}
+
 struct BadCase {
   std::string what;
   std::vector<std::string> args;  // after CT (and, with a mask, before OUTPUT); {MASK} is replaced
@@ -157,7 +191,7 @@ TEST(CtsurgGrid, BadInputExitsTwoNamesTheProblemAndWritesNothing) {
   TempDir dir;
   const fs::path ct = write_ct(dir);
   ctsurg::ImageGeometry shifted = ct_geometry();
-  shifted.origin[0] += 3.0;
+  shifted.origin[0] += 1000.0;  // nowhere near the CT
   const fs::path other = write_labels(dir, shifted, "shifted_labels.h5");
   const fs::path labels = write_labels(dir, ct_geometry(), "labels.h5");
   const auto before = ctsurg::test::files_in(dir.path());
@@ -168,7 +202,7 @@ TEST(CtsurgGrid, BadInputExitsTwoNamesTheProblemAndWritesNothing) {
       {"mask and window", {ct.string(), labels.string(), out, "--hu-min", "0"}, "only one"},
       {"empty window", {ct.string(), out, "--hu-min", "2000", "--hu-max", "3000"}, "[-1000, 60] HU"},
       {"empty window names it", {ct.string(), out, "--hu-min", "2000", "--hu-max", "3000"}, "[2000, 3000]"},
-      {"mask off the lattice", {ct.string(), other.string(), out}, "shifted_labels.h5: geometry"},
+      {"mask off the lattice", {ct.string(), other.string(), out}, "shifted_labels.h5: geometry: the selected tissue lies outside the CT"},
       {"absent label", {ct.string(), labels.string(), out, "--labels", "7"}, "--labels"},
       {"bad label list", {ct.string(), labels.string(), out, "--labels", "2,x"}, "--labels"},
       {"both sizes", {ct.string(), out, "--otsu", "--voxel-mm", "2", "--max-dim", "50"}, "--voxel-mm"},

@@ -11,7 +11,8 @@ namespace ctsurg {
 class AtomicOutput {
  public:
   // Checks that the parent folder exists and is writable (InputError naming the path otherwise)
-  // and picks a unique temporary name ".<name>.tmp-<pid>-<n>" in that folder. The temporary file is
+  // and picks a unique temporary name ".tmp-<pid>-<n>-<name>" in that folder (same suffix as the
+  // final name, so suffix-driven writers such as ITK's choose the right format). The temporary file is
   // removed on destruction unless commit() succeeded, and also if the process gets SIGINT/SIGTERM.
   explicit AtomicOutput(std::filesystem::path final_path);
   ~AtomicOutput();
