@@ -28,9 +28,9 @@ best_of() {
   echo "$best $mem"
 }
 
-voxels_of() {  # voxel count of a ctsurg HU volume file, from its dims attribute
-  h5dump -a /hu/dims "$1" 2>/dev/null | awk '/\(0\)/{gsub(/[(),:0]/," "); } /DATA/{f=1} f&&/[0-9]/{for(i=1;i<=NF;i++) if($i~/^[0-9]+$/) v[n++]=$i} END{print v[n-3]*v[n-2]*v[n-1]}'
-}
+# Numbers the tools log (stderr of the last run): "A x B x C voxels" and "N particles".
+logged_voxels() { grep -oE '[0-9]+ x [0-9]+ x [0-9]+ voxels' "$WORK/err" | head -1 | awk '{print $1*$3*$5}'; }
+logged_particles() { grep -oE '[0-9]+ particles' "$WORK/err" | head -1 | awk '{print $1}'; }
 
 out=$WORK/preprocess.md
 {
@@ -44,13 +44,15 @@ out=$WORK/preprocess.md
   echo "|---|---|---:|---:|---:|---:|"
 } >"$out"
 
+declare -A VOXELS  # CT voxel count by imported file
 import_case() {  # name input [options...]
   local name=$1 input=$2
   shift 2
   [[ -e $input ]] || return 0
-  read -r s m < <(best_of "$BIN/ctsurg-import" -q "$input" "$WORK/$name.h5" "$@")
+  read -r s m < <(best_of "$BIN/ctsurg-import" "$input" "$WORK/$name.h5" "$@")
   local n
-  n=$(voxels_of "$WORK/$name.h5")
+  n=$(logged_voxels)
+  VOXELS[$WORK/$name.h5]=$n
   printf '| import | %s | %s | %.2f | %.3g | %d |\n' "$name" "$n" "$s" "$(awk "BEGIN{print $n/($s>0?$s:0.01)}")" $((m / 1024)) >>"$out"
 }
 grid_case() {  # name ct.h5 [mask] -- options...
@@ -60,10 +62,10 @@ grid_case() {  # name ct.h5 [mask] -- options...
   while [[ $1 != -- ]]; do args+=("$1"); shift; done
   shift
   [[ -e ${args[0]} ]] || return 0
-  read -r s m < <(best_of "$BIN/ctsurg-grid" -q "${args[@]}" "$WORK/grid_$name.h5" --no-preview "$@")
+  read -r s m < <(best_of "$BIN/ctsurg-grid" "${args[@]}" "$WORK/grid_$name.h5" --no-preview "$@")
   local n p
-  n=$(voxels_of "${args[0]}")
-  p=$(h5dump -a /grid/particles "$WORK/grid_$name.h5" | awk '/\(0\)/{print $2}')
+  p=$(logged_particles)
+  n=${VOXELS[${args[0]}]}
   printf '| grid (%s particles) | %s | %s | %.2f | %.3g | %d |\n' "$p" "$name" "$n" "$s" "$(awk "BEGIN{print $n/($s>0?$s:0.01)}")" $((m / 1024)) >>"$out"
 }
 
@@ -79,7 +81,7 @@ import_case upper_abdomen_nifti "$DATA/abdomen/upper_abdomen_ct.nii.gz"
 grid_case heart_2.4mm "$WORK/heart_nifti.h5" "$ROOT/data_samples/heart/heart_mask.nii.gz" -- --voxel-mm 2.4
 grid_case heart_100cube "$WORK/heart_nifti.h5" "$ROOT/data_samples/heart/heart_mask.nii.gz" -- --max-dim 100
 grid_case kidneys_3mm "$WORK/upper_abdomen_nifti.h5" "$DATA/abdomen/upper_abdomen_labels.nii.gz" -- --labels 2,3 --voxel-mm 3
-grid_case head_bone_otsu "$WORK/head_nrrd.h5" -- --otsu --voxel-mm 3.2 --keep-largest
+grid_case head_otsu "$WORK/head_nrrd.h5" -- --otsu --voxel-mm 3.2 --keep-largest
 
 {
   echo
@@ -90,7 +92,7 @@ grid_case head_bone_otsu "$WORK/head_nrrd.h5" -- --otsu --voxel-mm 3.2 --keep-la
   echo "|---:|---:|---:|---:|---:|"
   "$BIN/bench_occupancy_downsampling" --benchmark_format=csv 2>/dev/null |
     awk -F, '/BM_DownsampleHeart/{split($1,a,/[:\/]/); n=split($1,p,"/"); c=p[2]; sub(/.*:/,"",c); t=p[3]; sub(/.*:/,"",t);
-      printf "| %.1f | %s | %.1f | %.3g | %d |\n", c/10, t, $3, $6, $(NF)}'
+      printf "| %.1f | %s | %.1f | %.3g | %d |\n", c/10, t, $3, $7, $(NF)}'
 } >>"$out"
 
 # Splice into docs/benchmarks.md between the preprocess markers (other stages keep their sections).
