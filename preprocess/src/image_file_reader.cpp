@@ -7,6 +7,8 @@
 #include <itkNiftiImageIO.h>
 #include <itkNrrdImageIO.h>
 
+#include "itk_image_io.h"
+
 #include "ctsurg/preprocess/image_file_reader.h"
 
 #include "ctsurg/core/error.h"
@@ -26,30 +28,10 @@ namespace ctsurg {
 
 namespace {
 
-std::string lower(std::string s) {
-  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  return s;
-}
-
-bool ends_with(const std::string& s, const std::string& suffix) {
-  return s.size() >= suffix.size() && s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
-}
-
-itk::ImageIOBase::Pointer make_io(ImageFileFormat format) {
-  switch (format) {
-    case ImageFileFormat::Nifti: return itk::NiftiImageIO::New().GetPointer();
-    case ImageFileFormat::Nrrd: return itk::NrrdImageIO::New().GetPointer();
-    case ImageFileFormat::MetaImage: return itk::MetaImageIO::New().GetPointer();
-  }
-  return nullptr;
-}
-
-// ITK exception text is long and repeats the location; keep its description only.
-std::string itk_reason(const itk::ExceptionObject& e) {
-  std::string d = e.GetDescription();
-  while (!d.empty() && (d.back() == '\n' || d.back() == ' ')) d.pop_back();
-  return d;
-}
+using detail::ends_with;
+using detail::itk_reason;
+using detail::lower_case;
+using detail::make_image_io;
 
 void check_file(const fs::path& path) {
   if (!fs::exists(path)) throw InputError(path.string(), "", "file does not exist");
@@ -163,9 +145,9 @@ class RepairedNrrdHeader {
 };
 
 ImageFileInfo read_info_from(const fs::path& readable, const fs::path& path, ImageFileFormat format) {
-  auto io = make_io(format);
+  auto io = make_image_io(format);
   if (!io->CanReadFile(readable.c_str())) {
-    throw InputError(path.string(), "header", "not a readable " + lower(io->GetNameOfClass()) + " file (corrupt header?)");
+    throw InputError(path.string(), "header", "not a readable " + lower_case(io->GetNameOfClass()) + " file (corrupt header?)");
   }
   io->SetFileName(readable.string());
   try {
@@ -187,7 +169,7 @@ ImageFileInfo read_info_from(const fs::path& readable, const fs::path& path, Ima
 }  // namespace
 
 ImageFileFormat image_file_format(const fs::path& path) {
-  const std::string name = lower(path.filename().string());
+  const std::string name = lower_case(path.filename().string());
   if (ends_with(name, ".nii") || ends_with(name, ".nii.gz")) return ImageFileFormat::Nifti;
   if (ends_with(name, ".nrrd") || ends_with(name, ".nhdr")) return ImageFileFormat::Nrrd;
   if (ends_with(name, ".mha") || ends_with(name, ".mhd")) return ImageFileFormat::MetaImage;
@@ -217,7 +199,7 @@ Volume<float> read_image_file(const fs::path& path, std::vector<std::string>* wa
 
   using Image = itk::Image<float, 3>;
   auto reader = itk::ImageFileReader<Image>::New();
-  reader->SetImageIO(make_io(format));
+  reader->SetImageIO(make_image_io(format));
   reader->SetFileName(readable.string());
   try {
     reader->Update();

@@ -7,6 +7,8 @@
 #include <itkNiftiImageIO.h>
 #include <itkNrrdImageIO.h>
 
+#include "itk_image_io.h"
+
 #include "ctsurg/preprocess/image_file_writer.h"
 
 #include "ctsurg/core/atomic_output.h"
@@ -25,14 +27,8 @@ namespace ctsurg {
 
 namespace {
 
-std::string lower(std::string s) {
-  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  return s;
-}
-
-bool ends_with(const std::string& s, const std::string& suffix) {
-  return s.size() >= suffix.size() && s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
-}
+using detail::ends_with;
+using detail::itk_reason;
 
 // The suffix as spelled in `path` (case kept) and the ITK reader/writer for it.
 struct WritableFormat {
@@ -42,7 +38,7 @@ struct WritableFormat {
 
 WritableFormat writable_format(const fs::path& path) {
   const std::string name = path.filename().string();
-  const std::string low = lower(name);
+  const std::string low = detail::lower_case(name);
   for (const char* s : {".nii.gz", ".nii", ".nrrd", ".mha"}) {
     if (ends_with(low, s) && low.size() > std::char_traits<char>::length(s)) {
       const std::string suffix = name.substr(name.size() - std::char_traits<char>::length(s));
@@ -58,12 +54,6 @@ WritableFormat writable_format(const fs::path& path) {
                      "detached-header formats cannot be written atomically; use .nii, .nii.gz, .nrrd or .mha");
   }
   throw InputError(path.string(), "file name", "unknown image format; expected .nii, .nii.gz, .nrrd or .mha");
-}
-
-std::string itk_reason(const itk::ExceptionObject& e) {
-  std::string d = e.GetDescription();
-  while (!d.empty() && (d.back() == '\n' || d.back() == ' ')) d.pop_back();
-  return d;
 }
 
 template <class T>

@@ -1,0 +1,25 @@
+// The frame shared by every ctsurg HDF5 file: a format name and version on the root, provenance,
+// the content, and an XDMF sidecar, all written atomically together (both files appear, or none).
+#pragma once
+
+#include "ctsurg/core/hdf5_file.h"
+#include "ctsurg/core/provenance.h"
+#include "ctsurg/core/xdmf_sidecar.h"
+
+#include <filesystem>
+#include <functional>
+#include <string>
+#include <vector>
+
+namespace ctsurg {
+
+// Writes `path` (content by `fill`, under the root group) and `path` with suffix .xdmf describing
+// `lattices`. `format` is the value of /@ctsurg_format, e.g. "hu_volume".
+void write_ctsurg_file(const std::filesystem::path& path, const std::string& format, int64_t format_version,
+                       const Provenance& provenance, const std::function<void(h5::Group& root)>& fill,
+                       const std::vector<XdmfLattice>& lattices);
+
+// Opens a ctsurg file and checks that /@ctsurg_format is `format` (InputError naming the file otherwise).
+h5::File open_ctsurg_file(const std::filesystem::path& path, const std::string& format);
+
+}  // namespace ctsurg

@@ -1,0 +1,44 @@
+#include "ctsurg/core/ctsurg_file.h"
+
+#include "ctsurg/core/atomic_output.h"
+#include "ctsurg/core/error.h"
+
+#include <fstream>
+
+namespace ctsurg {
+
+void write_ctsurg_file(const std::filesystem::path& path, const std::string& format, int64_t format_version,
+                       const Provenance& provenance, const std::function<void(h5::Group& root)>& fill,
+                       const std::vector<XdmfLattice>& lattices) {
+  AtomicOutput out(path);
+  AtomicOutput sidecar(xdmf_path_for(path));
+  {
+    h5::File f = h5::File::create(out.temp_path(), path.string());
+    h5::Group root = f.root();
+    root.set_attribute("ctsurg_format", format);
+    root.set_attribute("ctsurg_format_version", format_version);
+    provenance.write(root);
+    fill(root);
+    f.close();
+  }
+  {
+    const std::string xml = xdmf_document(path.filename().string(), lattices);
+    std::ofstream s(sidecar.temp_path(), std::ios::binary);
+    s << xml;
+    s.close();
+    if (!s) throw RuntimeError(sidecar.path().string() + ": cannot write");
+  }
+  out.commit();
+  sidecar.commit();
+}
+
+h5::File open_ctsurg_file(const std::filesystem::path& path, const std::string& format) {
+  h5::File f = h5::File::open(path);
+  const h5::Group root = f.root();
+  if (!root.has_attribute("ctsurg_format") || root.string_attribute("ctsurg_format") != format) {
+    throw InputError(path.string(), "/@ctsurg_format", "not a ctsurg " + format + " file");
+  }
+  return f;
+}
+
+}  // namespace ctsurg
