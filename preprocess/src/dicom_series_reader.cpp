@@ -19,6 +19,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <fstream>
 #include <map>
 #include <sstream>
 
@@ -110,8 +111,46 @@ SliceHeader slice_header(const gdcm::Scanner& scan, const fs::path& file) {
   return h;
 }
 
+// True when the file carries the DICOM Part 10 marker "DICM" at byte 128: a file with it that GDCM
+// cannot parse is a corrupt DICOM file, not an unrelated file to skip.
+bool has_dicom_marker(const std::string& file) {
+  std::ifstream in(file, std::ios::binary);
+  char magic[4] = {};
+  in.seekg(128);
+  in.read(magic, 4);
+  return in.gcount() == 4 && std::string(magic, 4) == "DICM";
+}
+
+// GDCM reads a truncated file without complaint (it keeps the declared length and leaves the rest
+// undefined), so a cut-off copy would read as an image with garbage at the end. Checks that the
+// native (uncompressed) PixelData element ends inside the file. Little-endian encodings only (the
+// big-endian transfer syntax is retired); encapsulated data (undefined length) is checked by its codec.
+void check_pixel_data_complete(const SliceHeader& h) {
+  std::ifstream in(h.file, std::ios::binary);
+  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  static const std::string tag("\xe0\x7f\x10\x00", 4);
+  const std::size_t at = bytes.rfind(tag);
+  if (at == std::string::npos) throw InputError(h.file.string(), "PixelData (7FE0,0010)", "missing");
+  const auto u32 = [&](std::size_t off) -> uint64_t {
+    if (off + 4 > bytes.size()) return 0xffffffffu;
+    return uint64_t(uint8_t(bytes[off])) | uint64_t(uint8_t(bytes[off + 1])) << 8 | uint64_t(uint8_t(bytes[off + 2])) << 16 |
+           uint64_t(uint8_t(bytes[off + 3])) << 24;
+  };
+  const std::string vr = bytes.substr(at + 4, 2);
+  const bool explicit_long = vr == "OB" || vr == "OW" || vr == "OF" || vr == "UN";
+  const uint64_t length = explicit_long ? u32(at + 8) : u32(at + 4);
+  const uint64_t start = explicit_long ? at + 12 : at + 8;
+  if (length == 0xffffffffu) return;  // encapsulated (compressed) fragments
+  if (start + length > bytes.size()) {
+    throw InputError(h.file.string(), "PixelData (7FE0,0010)",
+                     "truncated file: pixel data needs " + std::to_string(length) + " bytes, the file holds " +
+                         std::to_string(bytes.size() > start ? bytes.size() - start : 0));
+  }
+}
+
 // Reads one slice file as float HU (ITK applies RescaleSlope/Intercept).
 std::vector<float> read_slice(const SliceHeader& h) {
+  check_pixel_data_complete(h);
   using Image = itk::Image<float, 3>;
   auto io = itk::GDCMImageIO::New();
   auto reader = itk::ImageFileReader<Image>::New();
@@ -138,6 +177,7 @@ std::vector<DicomSeriesInfo> scan_dicom_folder(const fs::path& folder, std::vect
   if (!fs::is_directory(folder)) throw InputError(folder.string(), "", "not a folder");
   // Vendor private tags make GDCM print dictionary warnings; the reader reports what matters itself.
   gdcm::Trace::WarningOff();
+  gdcm::Trace::ErrorOff();
   gdcm::Trace::DebugOff();
   itk::Object::GlobalWarningDisplayOff();
   gdcm::Directory dir;
@@ -159,6 +199,7 @@ std::vector<DicomSeriesInfo> scan_dicom_folder(const fs::path& folder, std::vect
   };
   for (const auto& name : names) {
     if (!scan.IsKey(name.c_str())) {
+      if (has_dicom_marker(name)) throw InputError(name, "header", "corrupt DICOM file: GDCM cannot parse it");
       skip(name, "not a DICOM file");
       continue;
     }
@@ -323,6 +364,10 @@ DicomVolume read_dicom_series(const fs::path& folder, const DicomReadOptions& op
       << " mm along the table (" << stack.min_gap_mm * along_normal << " to " << stack.max_gap_mm * along_normal
       << " mm along the slice normal; mean step "
       << stack.mean_step_mm << " mm over " << headers.size() << " slices); ";
+    if (stack.missing_slices > 0) {
+      m << "about " << stack.missing_slices << " slice(s) appear to be missing (gaps that are whole multiples of "
+        << stack.min_gap_mm << " mm); ";
+    }
     if (options.uneven == UnevenSlicePolicy::Resample) {
       slices = resample_even_slices(slices, stack);
       m << "resampled to " << slices.geometry.dims[2] << " even slices of " << slices.geometry.spacing[2]

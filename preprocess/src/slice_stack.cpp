@@ -72,6 +72,13 @@ SliceStack analyse_slice_stack(const Eigen::Vector3d& row_dir, const Eigen::Vect
   s.tilt_deg = std::acos(cos_tilt) * 180.0 / M_PI;
   const double tol = tolerance_mm > 0 ? tolerance_mm : std::max(0.01, 0.01 * s.mean_step_mm);
   s.uneven = (s.max_gap_mm - s.mean_step_mm > tol) || (s.mean_step_mm - s.min_gap_mm > tol);
+  if (s.uneven) {
+    for (std::size_t k = 1; k < n; ++k) {
+      const double ratio = (s.offsets_mm[k] - s.offsets_mm[k - 1]) / s.min_gap_mm;
+      const double whole = std::round(ratio);
+      if (whole >= 2.0 && std::abs(ratio - whole) < 0.05) s.missing_slices += static_cast<int>(whole) - 1;
+    }
+  }
   return s;
 }
 

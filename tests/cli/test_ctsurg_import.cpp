@@ -112,6 +112,38 @@ TEST(CtsurgImport, MixedSeriesFolderIsRejectedUntilOneIsChosen) {
   EXPECT_EQ(r.exit_code, 0) << r.output;
 }
 
+TEST(CtsurgImport, CorruptOrTruncatedDicomSliceIsNamedNotSkipped) {
+  CTSURG_REQUIRE_SHARED_DATA();
+  test::TempDir in, out;
+  const auto series = in / "series";
+  fs::copy(test::shared_data_dir() / "dicom_qa" / "Philips_S21570_S2010", series);
+  fs::permissions(series / "I150", fs::perms::owner_write, fs::perm_options::add);
+  fs::resize_file(series / "I150", 200000);  // cut off inside the pixel data
+  expect_rejected({series.string(), (out / "ct.h5").string()}, "I150: PixelData (7FE0,0010): truncated file", out.path());
+  fs::remove(series / "I150");
+  fs::copy(test::shared_data_dir() / "dicom_qa" / "Philips_S21570_S2010" / "I150", series / "I150");
+  fs::permissions(series / "I150", fs::perms::owner_write, fs::perm_options::add);
+  {
+    std::fstream f(series / "I150", std::ios::in | std::ios::out | std::ios::binary);
+    f.seekp(200);
+    const std::string noise(400, '\xa5');  // garbage inside the header, after the DICM marker
+    f.write(noise.data(), static_cast<std::streamsize>(noise.size()));
+  }
+  expect_rejected({series.string(), (out / "ct.h5").string()}, "I150: header: corrupt DICOM file", out.path());
+}
+
+TEST(CtsurgImport, MissingSliceIsReported) {
+  CTSURG_REQUIRE_SHARED_DATA();
+  test::TempDir in, out;
+  const auto series = in / "series";
+  fs::copy(test::shared_data_dir() / "dicom_qa" / "Philips_S21570_S2010", series);
+  // I150 is a middle slice of the 28 (5 mm apart): removing it leaves one 10 mm gap.
+  fs::remove(series / "I150");
+  const auto r = test::run_tool("ctsurg-import", {series.string(), (out / "ct.h5").string()});
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("about 1 slice(s) appear to be missing"), std::string::npos) << r.output;
+}
+
 TEST(CtsurgImport, TiltAndUnevenSpacingAreWarnedWithNumbers) {
   CTSURG_REQUIRE_SHARED_DATA();
   test::TempDir out;

@@ -46,6 +46,7 @@ TEST(SliceStack, FlagsUnevenGapsAndResamplesAtSmallestGap) {
   EXPECT_TRUE(s.uneven);
   EXPECT_NEAR(s.min_gap_mm, 1.0, 1e-12);
   EXPECT_NEAR(s.max_gap_mm, 3.0, 1e-12);
+  EXPECT_EQ(s.missing_slices, 2);  // the 3 mm gap is three 1 mm steps
   ctsurg::Volume<float> v(s.geometry(1, 1, 1, 1, p[0]));
   v.voxels = {0.f, 10.f, 40.f};  // value = 10 x z: linear, so interpolation is exact
   const auto r = ctsurg::resample_even_slices(v, s);

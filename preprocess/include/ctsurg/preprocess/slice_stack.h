@@ -28,6 +28,7 @@ struct SliceStack {
   double tilt_deg = 0.0;             // angle between step_direction and the slice normal
   double max_off_line_mm = 0.0;      // largest distance of a position from the first-last line
   bool uneven = false;               // some gap differs from the mean step by more than the tolerance
+  int missing_slices = 0;            // gaps that are whole multiples (>= 2) of the smallest gap, as slices
 
   // Lattice with in-plane axes from the orientation, slice axis along step_direction with the mean
   // step: exact for every slice when the stack is even; for an uneven stack exact for the first and
