@@ -75,7 +75,7 @@ int main(int argc, char** argv) {
       "the occupancy grid of the spring-mass model: cubic cells, exact volume fractions, dominant labels, "
       "particles (ctsurg HDF5 + XDMF), plus a PNG preview montage.",
       [&](CLI::App& app) {
-        app.add_option("files", files, "CT.h5 (from ctsurg-import) [MASK (label volume on the CT lattice)] OUTPUT.h5")
+        app.add_option("files", files, "CT.h5 (from ctsurg-import) [MASK (label volume over the CT; put onto its voxels)] OUTPUT.h5")
             ->required()
             ->expected(2, 3);
         auto* sel = app.add_option_group("selection", "exactly one of: HU window, mask file, --otsu");
