@@ -18,3 +18,5 @@ endif()
 if(CTSURG_BUILD_BENCH)
   find_package(benchmark REQUIRED)
 endif()
+# Assimp only for exporting surfaces to glTF/OBJ/STL/PLY, confined to mesh/src/surface_export.cpp.
+find_package(assimp 5.2 REQUIRED)

@@ -10,6 +10,12 @@ namespace ctsurg {
 void write_ctsurg_file(const std::filesystem::path& path, const std::string& format, int64_t format_version,
                        const Provenance& provenance, const std::function<void(h5::Group& root)>& fill,
                        const std::vector<XdmfLattice>& lattices) {
+  write_ctsurg_file(path, format, format_version, provenance, fill, xdmf_document(path.filename().string(), lattices));
+}
+
+void write_ctsurg_file(const std::filesystem::path& path, const std::string& format, int64_t format_version,
+                       const Provenance& provenance, const std::function<void(h5::Group& root)>& fill,
+                       const std::string& sidecar_xml) {
   AtomicOutput out(path);
   AtomicOutput sidecar(xdmf_path_for(path));
   {
@@ -22,9 +28,8 @@ void write_ctsurg_file(const std::filesystem::path& path, const std::string& for
     f.close();
   }
   {
-    const std::string xml = xdmf_document(path.filename().string(), lattices);
     std::ofstream s(sidecar.temp_path(), std::ios::binary);
-    s << xml;
+    s << sidecar_xml;
     s.close();
     if (!s) throw RuntimeError(sidecar.path().string() + ": cannot write");
   }

@@ -18,6 +18,11 @@ namespace ctsurg {
 void write_ctsurg_file(const std::filesystem::path& path, const std::string& format, int64_t format_version,
                        const Provenance& provenance, const std::function<void(h5::Group& root)>& fill,
                        const std::vector<XdmfLattice>& lattices);
+// The same with a ready-made sidecar document (`sidecar_xml`, written to `path` with suffix .xdmf),
+// for content that is not a lattice, e.g. the triangle mesh of a surface file.
+void write_ctsurg_file(const std::filesystem::path& path, const std::string& format, int64_t format_version,
+                       const Provenance& provenance, const std::function<void(h5::Group& root)>& fill,
+                       const std::string& sidecar_xml);
 
 // Opens a ctsurg file and checks that /@ctsurg_format is `format` (InputError naming the file otherwise).
 h5::File open_ctsurg_file(const std::filesystem::path& path, const std::string& format);

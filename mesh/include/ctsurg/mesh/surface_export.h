@@ -1,0 +1,27 @@
+// Export of a surface mesh to the formats other programs open (Blender, MeshLab, slicers, web
+// viewers), through Assimp, chosen by the output's suffix:
+//   .glb (binary glTF 2), .gltf (glTF 2 JSON with a .bin beside it), .obj (Wavefront, no .mtl),
+//   .stl (binary STL), .ply (PLY)
+// Coordinates are written as they are: LPS millimetres (glTF's "metres, +Y up" convention is not
+// applied; a viewer shows the patient in mm with superior along +Z). Normals go with the vertices
+// where the format has them (not STL, which stores face normals only).
+#pragma once
+
+#include "ctsurg/core/surface_mesh_file.h"
+
+#include <filesystem>
+#include <string>
+
+namespace ctsurg {
+
+// Assimp exporter id for `path`'s suffix ("glb2", "gltf2", "objnomtl", "stlb", "ply"), or "" when
+// the suffix is none of the export formats.
+std::string surface_export_format(const std::filesystem::path& path);
+
+// Writes `mesh` to `path` (a temporary path is fine: the format comes from `format_of`'s suffix,
+// defaulting to `path`). InputError(path, "suffix", ...) for an unknown suffix; RuntimeError when
+// Assimp fails. Not atomic by itself: callers write to an AtomicOutput's temp_path().
+void export_surface_mesh(const std::filesystem::path& path, const SurfaceMesh& mesh,
+                         const std::filesystem::path& format_of = {});
+
+}  // namespace ctsurg

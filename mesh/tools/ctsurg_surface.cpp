@@ -1,0 +1,128 @@
+// ctsurg-surface INPUT.h5 OUTPUT: the isosurface of an occupancy grid's volume fractions (or of an
+// HU volume) by marching cubes, as a ctsurg surface file (.h5 + XDMF) or a mesh for other programs
+// (.glb, .gltf, .obj, .stl, .ply).
+#include "ctsurg/core/atomic_output.h"
+#include "ctsurg/core/error.h"
+#include "ctsurg/core/hdf5_file.h"
+#include "ctsurg/core/hu_volume_file.h"
+#include "ctsurg/core/occupancy_grid_file.h"
+#include "ctsurg/core/provenance.h"
+#include "ctsurg/core/surface_mesh_file.h"
+#include "ctsurg/core/tool_app.h"
+#include "ctsurg/core/version.h"
+#include "ctsurg/mesh/marching_cubes.h"
+#include "ctsurg/mesh/surface_export.h"
+
+#include <spdlog/spdlog.h>
+
+#include <chrono>
+#include <cmath>
+
+namespace fs = std::filesystem;
+
+namespace {
+
+struct Field {
+  ctsurg::Volume<float> volume;
+  std::string quantity, dataset;
+};
+
+// The field to contour: /grid/fraction of an occupancy grid file or /hu of an HU volume file.
+Field read_field(const fs::path& input) {
+  std::string format;
+  {
+    const ctsurg::h5::File f = ctsurg::h5::File::open(input);
+    const auto root = f.root();
+    if (root.has_attribute("ctsurg_format")) format = root.string_attribute("ctsurg_format");
+  }
+  if (format == "occupancy_grid") return {ctsurg::read_occupancy_grid_file(input).fraction, "fraction", "/grid/fraction"};
+  if (format == "hu_volume") return {ctsurg::read_hu_volume_file(input).hu, "HU", "/hu"};
+  throw ctsurg::InputError(input.string(), "/@ctsurg_format",
+                           "expected an occupancy grid (ctsurg-grid) or an HU volume (ctsurg-import), found '" +
+                               (format.empty() ? std::string("none") : format) + "'");
+}
+
+// .gltf writes NAME.bin beside NAME.gltf and names it inside the JSON, so it is exported into a
+// private folder under its final name and both files are moved into place atomically.
+void export_gltf(const fs::path& output, const ctsurg::SurfaceMesh& mesh) {
+  fs::path bin_path = output;
+  bin_path.replace_extension(".bin");
+  ctsurg::AtomicOutput out(output), bin(bin_path);
+  fs::path dir = out.temp_path();
+  dir += ".d";
+  fs::create_directory(dir);
+  struct Remove {
+    fs::path p;
+    ~Remove() {
+      std::error_code ec;
+      fs::remove_all(p, ec);
+    }
+  } remove{dir};
+  ctsurg::export_surface_mesh(dir / output.filename(), mesh);
+  fs::rename(dir / output.filename(), out.temp_path());
+  fs::rename(dir / bin_path.filename(), bin.temp_path());
+  out.commit();
+  bin.commit();
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::string input, output;
+  double iso = 0.5;
+  int threads = 0;
+  CLI::Option* iso_opt = nullptr;
+  return ctsurg::run_tool(
+      argc, argv, "ctsurg-surface",
+      "Extract the organ surface by marching cubes (closed, consistently oriented, shared vertices, each vertex "
+      "tied to its grid cell): from an occupancy grid's volume fractions (default iso 0.5) or an HU volume "
+      "(--iso HU). Output by suffix: .h5 (ctsurg surface + XDMF), .glb, .gltf, .obj, .stl, .ply; LPS mm.",
+      [&](CLI::App& app) {
+        app.add_option("input", input, "Occupancy grid (ctsurg-grid) or HU volume (ctsurg-import) file (.h5)")->required();
+        app.add_option("output", output, "Surface to write: .h5, .glb, .gltf, .obj, .stl or .ply")->required();
+        iso_opt = app.add_option("--iso", iso, "Isovalue: volume fraction for a grid (default 0.5), HU for an HU volume (required)");
+        app.add_option("--threads", threads, "OpenMP threads (0: all)")->check(CLI::NonNegativeNumber);
+      },
+      [&](const ctsurg::ToolContext& ctx) {
+        const auto start = std::chrono::steady_clock::now();
+        const fs::path out_path = output;
+        std::string ext = out_path.extension().string();
+        const bool h5 = ext == ".h5" || ext == ".hdf5";
+        if (!h5 && ctsurg::surface_export_format(out_path).empty()) {
+          throw ctsurg::InputError(output, "suffix", "unknown output format '" + ext + "'; use .h5, .glb, .gltf, .obj, .stl or .ply");
+        }
+        if (!std::isfinite(iso)) throw ctsurg::InputError("--iso", "", "must be a finite number");
+        ctsurg::check_output_path(out_path);
+        Field field = read_field(input);
+        if (field.quantity == "HU" && !*iso_opt) {
+          throw ctsurg::InputError("--iso", "", input + " is an HU volume: give the isovalue in HU, e.g. --iso 150");
+        }
+        const auto& g = field.volume.geometry;
+        spdlog::info("{}: {} {} x {} x {} nodes, iso {}", input, field.dataset, g.dims[0], g.dims[1], g.dims[2], iso);
+        if (ctsurg::inside_touches_border(field.volume, iso)) {
+          spdlog::warn("{}: {} >= {} on the lattice border: the surface is open there", input, field.dataset, iso);
+        }
+        ctsurg::SurfaceMesh mesh = ctsurg::marching_cubes(field.volume, iso, {threads});
+        if (mesh.triangle_count() == 0) {
+          throw ctsurg::InputError(input, field.dataset,
+                                   "no surface at iso " + fmt::format("{}", iso) +
+                                       ": every value is on one side of it (nothing to contour)");
+        }
+        mesh.quantity = field.quantity;
+        mesh.source_dataset = field.dataset;
+        spdlog::info("surface: {} vertices, {} triangles", mesh.vertex_count(), mesh.triangle_count());
+        if (h5) {
+          ctsurg::Provenance provenance{ctx.name, ctsurg::kVersion, ctx.command_line, {}, nlohmann::json::array()};
+          provenance.add_input(input);
+          ctsurg::write_surface_mesh_file(out_path, mesh, provenance);
+        } else if (ctsurg::surface_export_format(out_path) == "gltf2") {
+          export_gltf(out_path, mesh);
+        } else {
+          ctsurg::AtomicOutput out(out_path);
+          ctsurg::export_surface_mesh(out.temp_path(), mesh, out_path);
+          out.commit();
+        }
+        spdlog::info("wrote {} in {:.2f} s", output,
+                     std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+      });
+}
