@@ -11,6 +11,7 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <memory>
 #include <vector>
 
 namespace ctsurg {
@@ -172,57 +173,22 @@ const CaseTable& case_table() {
   return table;
 }
 
-constexpr uint32_t kNone = std::numeric_limits<uint32_t>::max();
+// Number of set bits of a 3-bit edge-flag byte, and of its bits below axis a.
+constexpr std::array<uint8_t, 8> kPop3{0, 1, 1, 2, 1, 2, 2, 3};
 
-// Vertex ids of the crossed lattice edges whose lower node lies in one z-slice of nodes, per node
-// and axis.
-struct SliceIds {
-  int64_t slice = -1;
-  std::array<std::vector<uint32_t>, 3> id;
-};
-
-struct Lattice {
-  const float* f;
-  int64_t nx, ny, nz;
-  double iso;
-  float value(int64_t i, int64_t j, int64_t k) const { return f[i + nx * (j + ny * k)]; }
-  bool inside(int64_t i, int64_t j, int64_t k) const { return double(value(i, j, k)) >= iso; }
-  // Whether the edge from node (i, j, k) along axis a exists and crosses iso.
-  bool crossed(int64_t i, int64_t j, int64_t k, int a) const {
-    const bool in = inside(i, j, k);
-    if (a == 0) return i + 1 < nx && inside(i + 1, j, k) != in;
-    if (a == 1) return j + 1 < ny && inside(i, j + 1, k) != in;
-    return k + 1 < nz && inside(i, j, k + 1) != in;
+// Central-difference gradient of f in index space at node (i, j, k) (one-sided on the border).
+Eigen::Vector3d node_gradient(const float* f, int64_t i, int64_t j, int64_t k, const std::array<int64_t, 3>& n) {
+  const int64_t sx = 1, sy = n[0], sz = n[0] * n[1];
+  const int64_t p = i + sy * j + sz * k;
+  if (i > 0 && j > 0 && k > 0 && i + 1 < n[0] && j + 1 < n[1] && k + 1 < n[2]) {
+    return {0.5 * (double(f[p + sx]) - double(f[p - sx])), 0.5 * (double(f[p + sy]) - double(f[p - sy])),
+            0.5 * (double(f[p + sz]) - double(f[p - sz]))};
   }
-  int cell_case(int64_t i, int64_t j, int64_t k) const {
-    int c = 0;
-    for (int n = 0; n < 8; ++n) c |= int(inside(i + (n & 1), j + ((n >> 1) & 1), k + ((n >> 2) & 1))) << n;
-    return c;
-  }
-  // Central-difference gradient in index space (one-sided on the border).
-  Eigen::Vector3d gradient(int64_t i, int64_t j, int64_t k) const {
-    const std::array<int64_t, 3> p{i, j, k}, n{nx, ny, nz};
-    Eigen::Vector3d g;
-    for (int a = 0; a < 3; ++a) {
-      std::array<int64_t, 3> lo = p, hi = p;
-      lo[static_cast<std::size_t>(a)] = std::max<int64_t>(p[static_cast<std::size_t>(a)] - 1, 0);
-      hi[static_cast<std::size_t>(a)] = std::min<int64_t>(p[static_cast<std::size_t>(a)] + 1, n[static_cast<std::size_t>(a)] - 1);
-      const double h = double(hi[static_cast<std::size_t>(a)] - lo[static_cast<std::size_t>(a)]);
-      g[a] = (double(value(hi[0], hi[1], hi[2])) - double(value(lo[0], lo[1], lo[2]))) / h;
-    }
-    return g;
-  }
-};
-
-void fill_slice_ids(const Lattice& L, int64_t k, uint32_t first, SliceIds& s) {
-  s.slice = k;
-  const auto n = static_cast<std::size_t>(L.nx * L.ny);
-  for (auto& v : s.id) v.assign(n, kNone);
-  uint32_t next = first;
-  for (int64_t j = 0; j < L.ny; ++j)
-    for (int64_t i = 0; i < L.nx; ++i)
-      for (int a = 0; a < 3; ++a)
-        if (L.crossed(i, j, k, a)) s.id[static_cast<std::size_t>(a)][static_cast<std::size_t>(i + L.nx * j)] = next++;
+  const auto diff = [&](int64_t c, int64_t m, int64_t stride) {
+    const int64_t lo = c > 0 ? 1 : 0, hi = c + 1 < m ? 1 : 0;
+    return (double(f[p + hi * stride]) - double(f[p - lo * stride])) / double(lo + hi);
+  };
+  return {diff(i, n[0], sx), diff(j, n[1], sy), diff(k, n[2], sz)};
 }
 
 }  // namespace
@@ -237,20 +203,69 @@ SurfaceMesh marching_cubes(const Volume<float>& field, double iso, const Marchin
     throw InputError("field", "voxels", "voxel count does not match the geometry");
   }
   const CaseTable& table = case_table();
-  const Lattice L{field.voxels.data(), g.dims[0], g.dims[1], g.dims[2], iso};
   const int threads = options.threads > 0 ? options.threads : omp_get_max_threads();
+  const int64_t nx = g.dims[0], ny = g.dims[1], nz = g.dims[2], sxy = nx * ny;
+  const auto N = static_cast<std::size_t>(g.voxel_count());
+  const float* f = field.voxels.data();
 
-  // Pass 1: per slice k, crossed edges with lower node in slice k and triangles of cells in slab k.
-  const int64_t nz = L.nz;
-  std::vector<int64_t> vcount(static_cast<std::size_t>(nz + 1), 0), tcount(static_cast<std::size_t>(nz + 1), 0);
+  // Per node, 1 byte each: its side of iso; the crossing flags of the 3 lattice edges leaving it
+  // (bit a: the edge along axis a exists and crosses); the case of the cell it is the lower corner
+  // of (corner c at (c & 1, c >> 1 & 1, c >> 2 & 1); unused on the last row, column and slice).
+  // Left uninitialised (every byte read is written first): zero-filling them would cost as much as
+  // pass 0.
+  const std::unique_ptr<uint8_t[]> inside(new uint8_t[N]), edges(new uint8_t[N]), cases(new uint8_t[N]);
+  // Per node row (j, k): its vertex count (a row's vertex ids are consecutive, in (i, axis) order)
+  // and the first and last node with a crossed edge (the trimming of flying edges: the passes skip
+  // the empty ends of rows; lo > hi for a row with none).
+  const auto rows = static_cast<std::size_t>(ny * nz);
+  std::vector<uint32_t> row_vertices(rows);
+  std::vector<int32_t> row_lo(rows), row_hi(rows);
+
+#pragma omp parallel for schedule(static) num_threads(threads)
+  for (int64_t k = 0; k < nz; ++k) {
+    uint8_t* __restrict in = inside.get() + k * sxy;
+    const float* __restrict fk = f + k * sxy;
+    for (int64_t p = 0; p < sxy; ++p) in[p] = double(fk[p]) >= iso;
+  }
+
+  // Pass 1 (parallel over slices): edge flags, per-row vertex counts, cell cases and the number of
+  // vertices (edges leaving slice k) and triangles (cells between k and k + 1) of every slice. The
+  // loops are plain byte loops over a row so that they vectorise.
+  std::vector<int64_t> vcount(static_cast<std::size_t>(nz), 0), tcount(static_cast<std::size_t>(nz), 0);
 #pragma omp parallel for schedule(static) num_threads(threads)
   for (int64_t k = 0; k < nz; ++k) {
     int64_t nv = 0, nt = 0;
-    for (int64_t j = 0; j < L.ny; ++j)
-      for (int64_t i = 0; i < L.nx; ++i) {
-        for (int a = 0; a < 3; ++a) nv += L.crossed(i, j, k, a);
-        if (k + 1 < nz && j + 1 < L.ny && i + 1 < L.nx) nt += table.triangle_count[static_cast<std::size_t>(L.cell_case(i, j, k))];
+    for (int64_t j = 0; j < ny; ++j) {
+      const int64_t r = nx * j + sxy * k;
+      const uint8_t* __restrict a = inside.get() + r;
+      uint8_t* __restrict e = edges.get() + r;
+      for (int64_t i = 0; i + 1 < nx; ++i) e[i] = static_cast<uint8_t>(a[i] ^ a[i + 1]);
+      e[nx - 1] = 0;
+      if (j + 1 < ny)
+        for (int64_t i = 0; i < nx; ++i) e[i] = static_cast<uint8_t>(e[i] | (a[i] ^ a[i + nx]) << 1);
+      if (k + 1 < nz)
+        for (int64_t i = 0; i < nx; ++i) e[i] = static_cast<uint8_t>(e[i] | (a[i] ^ a[i + sxy]) << 2);
+      uint32_t rv = 0;
+      int64_t lo = nx, hi = -1;
+      for (int64_t i = 0; i < nx; ++i) rv += kPop3[e[i]];
+      if (rv > 0) {
+        for (lo = 0; e[lo] == 0;) ++lo;
+        for (hi = nx - 1; e[hi] == 0;) --hi;
       }
+      row_vertices[static_cast<std::size_t>(j + ny * k)] = rv;
+      row_lo[static_cast<std::size_t>(j + ny * k)] = static_cast<int32_t>(lo);
+      row_hi[static_cast<std::size_t>(j + ny * k)] = static_cast<int32_t>(hi);
+      nv += rv;
+      if (k + 1 == nz || j + 1 == ny) continue;
+      const uint8_t* __restrict a1 = a + nx;
+      const uint8_t* __restrict b0 = a + sxy;
+      const uint8_t* __restrict b1 = b0 + nx;
+      uint8_t* __restrict c = cases.get() + r;
+      for (int64_t i = 0; i + 1 < nx; ++i)
+        c[i] = static_cast<uint8_t>(a[i] | a[i + 1] << 1 | a1[i] << 2 | a1[i + 1] << 3 | b0[i] << 4 | b0[i + 1] << 5 |
+                                    b1[i] << 6 | b1[i + 1] << 7);
+      for (int64_t i = 0; i + 1 < nx; ++i) nt += table.triangle_count[c[i]];
+    }
     vcount[static_cast<std::size_t>(k)] = nv;
     tcount[static_cast<std::size_t>(k)] = nt;
   }
@@ -261,7 +276,7 @@ SurfaceMesh marching_cubes(const Volume<float>& field, double iso, const Marchin
     tfirst[static_cast<std::size_t>(k + 1)] = tfirst[static_cast<std::size_t>(k)] + tcount[static_cast<std::size_t>(k)];
   }
   const int64_t V = vfirst[static_cast<std::size_t>(nz)], F = tfirst[static_cast<std::size_t>(nz)];
-  if (V >= int64_t(kNone)) throw RuntimeError("marching cubes: more than 2^32 - 1 vertices");
+  if (V >= int64_t(std::numeric_limits<uint32_t>::max())) throw RuntimeError("marching cubes: more than 2^32 - 1 vertices");
 
   SurfaceMesh mesh;
   mesh.lattice = g;
@@ -277,47 +292,62 @@ SurfaceMesh marching_cubes(const Volume<float>& field, double iso, const Marchin
   const Eigen::Matrix3d M = g.index_to_world_matrix();
   const Eigen::Matrix3d gradient_to_world = M.inverse().transpose();  // grad_world = M^-T grad_index
   const Eigen::Vector3d origin = g.origin;
+  const std::array<int64_t, 3> dims{nx, ny, nz};
   // The table orients triangles in index space; a lattice whose index-to-world map reverses
   // orientation (det < 0, e.g. a flipped slice axis) needs the opposite winding in LPS.
   const bool flip = M.determinant() < 0.0;
+  // Cell edge e leaves the cell corner edge_base_corner(e) along axis e / 4: that corner's node row
+  // is one of the 4 rows (j, k), (j + 1, k), (j, k + 1), (j + 1, k + 1) (index by + 2 bz) and its
+  // node is i or i + 1 (bx).
+  std::array<uint8_t, 12> edge_row{}, edge_dx{}, edge_axis{};
+  for (int e = 0; e < 12; ++e) {
+    const int base = edge_base_corner(e);
+    edge_row[static_cast<std::size_t>(e)] = static_cast<uint8_t>(((base >> 1) & 1) + 2 * ((base >> 2) & 1));
+    edge_dx[static_cast<std::size_t>(e)] = static_cast<uint8_t>(base & 1);
+    edge_axis[static_cast<std::size_t>(e)] = static_cast<uint8_t>(e / 4);
+  }
 
-  // Pass 2: each slice writes its own vertices and its slab's triangles at its offsets.
+  // Pass 2 (parallel over slices): each slice writes its own vertices and the triangles of the
+  // cells above it at its offsets.
 #pragma omp parallel num_threads(threads)
   {
-    SliceIds cur, nxt;
+    std::vector<uint32_t> row_first(static_cast<std::size_t>(2 * ny));  // first vertex id of rows of slices k, k + 1
 #pragma omp for schedule(static)
     for (int64_t k = 0; k < nz; ++k) {
-      if (nxt.slice == k) {
-        std::swap(cur, nxt);
-      } else {
-        fill_slice_ids(L, k, static_cast<uint32_t>(vfirst[static_cast<std::size_t>(k)]), cur);
+      for (int64_t s = 0; s < 2 && k + s < nz; ++s) {
+        auto next = static_cast<uint32_t>(vfirst[static_cast<std::size_t>(k + s)]);
+        for (int64_t j = 0; j < ny; ++j) {
+          row_first[static_cast<std::size_t>(j + ny * s)] = next;
+          next += row_vertices[static_cast<std::size_t>(j + ny * (k + s))];
+        }
       }
-      if (k + 1 < nz) fill_slice_ids(L, k + 1, static_cast<uint32_t>(vfirst[static_cast<std::size_t>(k + 1)]), nxt);
 
       // Vertices of slice k.
-      for (int64_t j = 0; j < L.ny; ++j)
-        for (int64_t i = 0; i < L.nx; ++i)
+      for (int64_t j = 0; j < ny; ++j) {
+        std::size_t v = row_first[static_cast<std::size_t>(j)];
+        const uint8_t* e = edges.get() + nx * j + sxy * k;
+        const auto row = static_cast<std::size_t>(j + ny * k);
+        for (int64_t i = row_lo[row]; i <= row_hi[row]; ++i) {
+          if (e[i] == 0) continue;
           for (int a = 0; a < 3; ++a) {
-            const uint32_t id = cur.id[static_cast<std::size_t>(a)][static_cast<std::size_t>(i + L.nx * j)];
-            if (id == kNone) continue;
+            if (!((e[i] >> a) & 1)) continue;
             const std::array<int64_t, 3> p{i, j, k};
             std::array<int64_t, 3> q = p;
             ++q[static_cast<std::size_t>(a)];
-            const double vp = L.value(p[0], p[1], p[2]), vq = L.value(q[0], q[1], q[2]);
+            const int64_t pp = i + nx * j + sxy * k, pq = q[0] + nx * q[1] + sxy * q[2];
+            const double vp = f[pp], vq = f[pq];
             const double t = std::clamp((iso - vp) / (vq - vp), 0.0, 1.0);
             Eigen::Vector3d ijk{double(i), double(j), double(k)};
             ijk[a] += t;
             const Eigen::Vector3d x = origin + M * ijk;
-            const Eigen::Vector3d grad =
-                gradient_to_world * ((1.0 - t) * L.gradient(p[0], p[1], p[2]) + t * L.gradient(q[0], q[1], q[2]));
-            const bool p_inside = vp >= iso;
+            const Eigen::Vector3d grad = gradient_to_world * ((1.0 - t) * node_gradient(f, p[0], p[1], p[2], dims) +
+                                                              t * node_gradient(f, q[0], q[1], q[2], dims));
+            const bool p_inside = inside[static_cast<std::size_t>(pp)] != 0;
             Eigen::Vector3d n = -grad;
             if (!(n.norm() > 1e-30) || !n.allFinite()) n = (p_inside ? 1.0 : -1.0) * M.col(a);
             n.normalize();
-            const std::size_t v = id;
             std::array<int64_t, 3> cell{};
             Eigen::Vector3d frac;
-            const std::array<int64_t, 3> dims{L.nx, L.ny, L.nz};
             for (int b = 0; b < 3; ++b) {
               cell[static_cast<std::size_t>(b)] = std::min(p[static_cast<std::size_t>(b)], dims[static_cast<std::size_t>(b)] - 2);
               frac[b] = ijk[b] - double(cell[static_cast<std::size_t>(b)]);
@@ -329,31 +359,47 @@ SurfaceMesh marching_cubes(const Volume<float>& field, double iso, const Marchin
               mesh.nearest_node[3 * v + static_cast<std::size_t>(b)] =
                   static_cast<int32_t>(p_inside ? p[static_cast<std::size_t>(b)] : q[static_cast<std::size_t>(b)]);
             }
-            for (int c = 0; c < 8; ++c) {
-              double w = 1.0;
-              for (int b = 0; b < 3; ++b) w *= ((c >> b) & 1) ? frac[b] : 1.0 - frac[b];
-              mesh.grid_weights[8 * v + static_cast<std::size_t>(c)] = static_cast<float>(w);
-            }
+            const double wx[2] = {1.0 - frac[0], frac[0]}, wy[2] = {1.0 - frac[1], frac[1]}, wz[2] = {1.0 - frac[2], frac[2]};
+            for (int c = 0; c < 8; ++c)
+              mesh.grid_weights[8 * v + static_cast<std::size_t>(c)] = static_cast<float>(wx[c & 1] * wy[(c >> 1) & 1] * wz[c >> 2]);
+            ++v;
           }
+        }
+      }
 
-      // Triangles of the cells between slices k and k + 1.
+      // Triangles of the cells between slices k and k + 1. Walking a row of cells, id[r] is the
+      // first vertex id at node i of the cell's node row r; an edge's id adds the crossed edges
+      // before it at its node (lower axes) and, for a node at i + 1, those of node i.
       if (k + 1 == nz) continue;
-      std::size_t out = static_cast<std::size_t>(3 * tfirst[static_cast<std::size_t>(k)]);
-      for (int64_t j = 0; j + 1 < L.ny; ++j)
-        for (int64_t i = 0; i + 1 < L.nx; ++i) {
-          const auto config = static_cast<std::size_t>(L.cell_case(i, j, k));
+      uint32_t* out = mesh.triangles.data() + 3 * tfirst[static_cast<std::size_t>(k)];
+      for (int64_t j = 0; j + 1 < ny; ++j) {
+        const uint8_t* c = cases.get() + nx * j + sxy * k;
+        const uint8_t* e[4] = {edges.get() + nx * j + sxy * k, edges.get() + nx * (j + 1) + sxy * k,
+                               edges.get() + nx * j + sxy * (k + 1), edges.get() + nx * (j + 1) + sxy * (k + 1)};
+        uint32_t id[4] = {row_first[static_cast<std::size_t>(j)], row_first[static_cast<std::size_t>(j + 1)],
+                          row_first[static_cast<std::size_t>(ny + j)], row_first[static_cast<std::size_t>(ny + j + 1)]};
+        // Only cells touching a node with a crossed edge can have triangles; before the first such
+        // node no id advances.
+        int64_t lo = nx, hi = -1;
+        for (const int64_t r : {j + ny * k, j + 1 + ny * k, j + ny * (k + 1), j + 1 + ny * (k + 1)}) {
+          lo = std::min<int64_t>(lo, row_lo[static_cast<std::size_t>(r)]);
+          hi = std::max<int64_t>(hi, row_hi[static_cast<std::size_t>(r)]);
+        }
+        for (int64_t i = std::max<int64_t>(lo - 1, 0); i <= std::min(hi, nx - 2); ++i) {
+          const unsigned config = c[i];
           const int nt = table.triangle_count[config];
           for (int t = 0; t < nt; ++t, out += 3)
-            for (int c = 0; c < 3; ++c) {
-              const int e = table.triangles[config][static_cast<std::size_t>(t)][static_cast<std::size_t>(c)];
-              const int base = edge_base_corner(e);
-              const SliceIds& s = (base >> 2) & 1 ? nxt : cur;
-              const int64_t node = (i + (base & 1)) + L.nx * (j + ((base >> 1) & 1));
-              const uint32_t id = s.id[static_cast<std::size_t>(e / 4)][static_cast<std::size_t>(node)];
-              assert(id != kNone);
-              mesh.triangles[out + static_cast<std::size_t>(flip && c > 0 ? 3 - c : c)] = id;
+            for (int m = 0; m < 3; ++m) {
+              const auto ce = static_cast<std::size_t>(table.triangles[config][static_cast<std::size_t>(t)][static_cast<std::size_t>(m)]);
+              const unsigned r = edge_row[ce], dx = edge_dx[ce];
+              const uint8_t fl = e[r][i + dx];
+              assert((fl >> edge_axis[ce]) & 1);
+              const uint32_t vid = id[r] + (dx ? kPop3[e[r][i]] : 0u) + kPop3[fl & ((1u << edge_axis[ce]) - 1u)];
+              out[flip && m > 0 ? 3 - m : m] = vid;
             }
+          for (int r = 0; r < 4; ++r) id[r] += kPop3[e[r][i]];
         }
+      }
     }
   }
   return mesh;
