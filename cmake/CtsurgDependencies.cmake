@@ -20,3 +20,5 @@ if(CTSURG_BUILD_BENCH)
 endif()
 # Assimp only for exporting surfaces to glTF/OBJ/STL/PLY, confined to mesh/src/surface_export.cpp.
 find_package(assimp 5.2 REQUIRED)
+# CGAL (header-only, with GMP/MPFR) for tetrahedral meshing and surface decimation, confined to the .cpp files that use it.
+find_package(CGAL 5.5 REQUIRED)

@@ -10,11 +10,16 @@
 #include "ctsurg/core/surface_mesh_file.h"
 #include "ctsurg/core/tool_app.h"
 #include "ctsurg/core/version.h"
+#include "ctsurg/mesh/lattice_padding.h"
+#include "ctsurg/mesh/lattice_tie.h"
 #include "ctsurg/mesh/marching_cubes.h"
+#include "ctsurg/mesh/surface_decimation.h"
+#include "ctsurg/mesh/surface_smoothing.h"
 #include "ctsurg/mesh/surface_export.h"
 
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 
@@ -71,6 +76,9 @@ int main(int argc, char** argv) {
   std::string input, output;
   double iso = 0.5;
   int threads = 0;
+  int smooth = 0;
+  int64_t decimate = 0;
+  bool open_border = false;
   CLI::Option* iso_opt = nullptr;
   return ctsurg::run_tool(
       argc, argv, "ctsurg-surface",
@@ -82,6 +90,13 @@ int main(int argc, char** argv) {
         app.add_option("output", output, "Surface to write: .h5, .glb, .gltf, .obj, .stl or .ply")->required();
         iso_opt = app.add_option("--iso", iso, "Isovalue: volume fraction for a grid (default 0.5), HU for an HU volume (required)");
         app.add_option("--threads", threads, "OpenMP threads (0: all)")->check(CLI::NonNegativeNumber);
+        app.add_option("--smooth", smooth, "Taubin smoothing iterations (lambda 0.5, pass band 0.1; volume-preserving); 0: off")
+            ->check(CLI::NonNegativeNumber);
+        app.add_option("--decimate", decimate, "Quadric edge-collapse decimation to about this many triangles; 0: off")
+            ->check(CLI::NonNegativeNumber);
+        app.add_flag("--open-border", open_border,
+                     "Leave the surface open where the tissue touches the lattice border (default: close it with a "
+                     "one-node frame of outside values, which moves the stored lattice by one node)");
       },
       [&](const ctsurg::ToolContext& ctx) {
         const auto start = std::chrono::steady_clock::now();
@@ -99,14 +114,33 @@ int main(int argc, char** argv) {
         }
         const auto& g = field.volume.geometry;
         spdlog::info("{}: {} {} x {} x {} nodes, iso {}", input, field.dataset, g.dims[0], g.dims[1], g.dims[2], iso);
+        if (decimate > 0 && decimate < 4) throw ctsurg::InputError("--decimate", "", "the target must be at least 4 triangles");
         if (ctsurg::inside_touches_border(field.volume, iso)) {
-          spdlog::warn("{}: {} >= {} on the lattice border: the surface is open there", input, field.dataset, iso);
+          if (open_border) {
+            spdlog::warn("{}: {} >= {} on the lattice border: the surface is open there (--open-border)", input, field.dataset, iso);
+          } else {
+            // A frame of nodes below iso closes the surface along the border: the organ is cut there.
+            const auto [lo, hi] = std::minmax_element(field.volume.voxels.begin(), field.volume.voxels.end());
+            (void)hi;
+            const float outside = std::min(*lo, static_cast<float>(iso - 1.0));
+            spdlog::warn("{}: {} >= {} on the lattice border: closing the surface there (the lattice gains a one-node frame "
+                         "of value {}; --open-border to leave it open)", input, field.dataset, iso, outside);
+            field.volume = ctsurg::pad_lattice(field.volume, outside);
+          }
         }
         ctsurg::SurfaceMesh mesh = ctsurg::marching_cubes(field.volume, iso, {threads});
         if (mesh.triangle_count() == 0) {
           throw ctsurg::InputError(input, field.dataset,
                                    "no surface at iso " + fmt::format("{}", iso) +
                                        ": every value is on one side of it (nothing to contour)");
+        }
+        if (smooth > 0 || (decimate > 0 && decimate < mesh.triangle_count())) {
+          const int64_t before = mesh.triangle_count();
+          if (smooth > 0) ctsurg::taubin_smooth(mesh, {smooth});
+          if (decimate > 0) ctsurg::decimate_surface(mesh, decimate);
+          ctsurg::tie_surface_to_lattice(mesh, field.volume);
+          if (smooth > 0) spdlog::info("smoothed: {} Taubin iterations", smooth);
+          if (mesh.triangle_count() < before) spdlog::info("decimated: {} -> {} triangles", before, mesh.triangle_count());
         }
         mesh.quantity = field.quantity;
         mesh.source_dataset = field.dataset;

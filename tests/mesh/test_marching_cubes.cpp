@@ -6,6 +6,7 @@
 
 #include "ctsurg/core/error.h"
 #include "ctsurg/preprocess/synthetic_phantom.h"
+#include "surface_checks.h"
 
 #include <gtest/gtest.h>
 
@@ -23,45 +24,10 @@ namespace {
 using ctsurg::SurfaceMesh;
 using ctsurg::Volume;
 
-Eigen::Vector3d vertex(const SurfaceMesh& m, uint32_t v) {
-  return {m.vertices[3 * v], m.vertices[3 * v + 1], m.vertices[3 * v + 2]};
-}
-
-// Every edge is used by exactly two triangles, once in each direction; no triangle repeats a
-// vertex. Returns an empty string or the first problem.
-std::string manifold_problem(const SurfaceMesh& m) {
-  std::map<std::pair<uint32_t, uint32_t>, int> directed;
-  for (int64_t t = 0; t < m.triangle_count(); ++t) {
-    const uint32_t* f = &m.triangles[static_cast<std::size_t>(3 * t)];
-    if (f[0] == f[1] || f[1] == f[2] || f[0] == f[2]) return "degenerate triangle " + std::to_string(t);
-    for (int c = 0; c < 3; ++c) ++directed[{f[c], f[(c + 1) % 3]}];
-  }
-  for (const auto& [e, n] : directed) {
-    if (n != 1) return "directed edge used " + std::to_string(n) + " times";
-    const auto it = directed.find({e.second, e.first});
-    if (it == directed.end()) return "edge " + std::to_string(e.first) + "-" + std::to_string(e.second) + " has one triangle";
-  }
-  return "";
-}
-
-// Enclosed volume by the divergence theorem, mm^3 (positive for outward orientation).
-double enclosed_volume(const SurfaceMesh& m) {
-  double v = 0.0;
-  for (int64_t t = 0; t < m.triangle_count(); ++t) {
-    const uint32_t* f = &m.triangles[static_cast<std::size_t>(3 * t)];
-    v += vertex(m, f[0]).dot(vertex(m, f[1]).cross(vertex(m, f[2]))) / 6.0;
-  }
-  return v;
-}
-
-double area(const SurfaceMesh& m) {
-  double a = 0.0;
-  for (int64_t t = 0; t < m.triangle_count(); ++t) {
-    const uint32_t* f = &m.triangles[static_cast<std::size_t>(3 * t)];
-    a += 0.5 * (vertex(m, f[1]) - vertex(m, f[0])).cross(vertex(m, f[2]) - vertex(m, f[0])).norm();
-  }
-  return a;
-}
+using ctsurg::test::enclosed_volume;
+using ctsurg::test::manifold_problem;
+using ctsurg::test::vertex;
+double area(const SurfaceMesh& m) { return ctsurg::test::surface_area(m); }
 
 bool unique_positions(const SurfaceMesh& m) {
   std::set<std::tuple<float, float, float>> seen;
