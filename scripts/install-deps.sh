@@ -12,7 +12,7 @@ packages=(
   libosmesa6-dev libcli11-dev libspdlog-dev nlohmann-json3-dev libyaml-cpp-dev libssl-dev zlib1g-dev
   # tests and benchmarks; dcm2niix and python3-nibabel/vtk9 are the peers we validate against
   libgtest-dev libgmock-dev libbenchmark-dev dcm2niix libgdcm-tools python3 python3-numpy python3-nibabel
-  python3-vtk9 time
+  python3-vtk9 python3-h5py time
 )
 
 missing=()

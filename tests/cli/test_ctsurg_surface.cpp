@@ -5,6 +5,7 @@
 #include "ctsurg/core/occupancy_grid_file.h"
 #include "ctsurg/core/provenance.h"
 #include "ctsurg/core/surface_mesh_file.h"
+#include "surface_checks.h"
 #include "test_support.h"
 
 #include <gtest/gtest.h>
@@ -67,21 +68,23 @@ std::string read_bytes(const fs::path& p) {
   return s.str();
 }
 
-bool closed_and_oriented(const ctsurg::SurfaceMesh& m) {
-  std::map<std::pair<uint32_t, uint32_t>, int> directed;
-  for (std::size_t t = 0; t < m.triangles.size(); t += 3)
-    for (std::size_t c = 0; c < 3; ++c) ++directed[{m.triangles[t + c], m.triangles[t + (c + 1) % 3]}];
-  for (const auto& [e, n] : directed)
-    if (n != 1 || !directed.count({e.second, e.first})) return false;
-  return true;
-}
+bool closed_and_oriented(const ctsurg::SurfaceMesh& m) { return ctsurg::test::manifold_problem(m).empty(); }
+using ctsurg::test::enclosed_volume;
 
-double enclosed_volume(const ctsurg::SurfaceMesh& m) {
-  double v = 0.0;
-  const auto p = [&](uint32_t i) { return Eigen::Vector3d(m.vertices[3 * i], m.vertices[3 * i + 1], m.vertices[3 * i + 2]); };
-  for (std::size_t t = 0; t < m.triangles.size(); t += 3)
-    v += p(m.triangles[t]).dot(p(m.triangles[t + 1]).cross(p(m.triangles[t + 2]))) / 6.0;
-  return v;
+// A 12^3 HU volume with a 6^3 block of 300 HU in air; `at_border` puts the block against the
+// volume's i = 0 face.
+fs::path write_block_ct(const TempDir& dir, bool at_border) {
+  ctsurg::HuVolume v;
+  ctsurg::ImageGeometry g;
+  g.dims = {12, 12, 12};
+  v.hu = ctsurg::Volume<float>(g, -1000.0f);
+  const int64_t i0 = at_border ? 0 : 3;
+  for (int64_t k = 3; k < 9; ++k)
+    for (int64_t j = 3; j < 9; ++j)
+      for (int64_t i = i0; i < i0 + 6; ++i) v.hu(i, j, k) = 300.0f;
+  const fs::path p = dir / (at_border ? "border_ct.h5" : "ct.h5");
+  ctsurg::write_hu_volume_file(p, v, test_provenance());
+  return p;
 }
 
 TEST(CtsurgSurface, GridToSurfaceFileIsClosedAndNearTheBall) {
@@ -143,14 +146,7 @@ TEST(CtsurgSurface, RerunIsByteIdentical) {
 
 TEST(CtsurgSurface, HuVolumeNeedsIso) {
   TempDir dir;
-  ctsurg::HuVolume v;
-  ctsurg::ImageGeometry g;
-  g.dims = {12, 12, 12};
-  v.hu = ctsurg::Volume<float>(g, -1000.0f);
-  for (int64_t k = 3; k < 9; ++k)
-    for (int64_t j = 3; j < 9; ++j)
-      for (int64_t i = 3; i < 9; ++i) v.hu(i, j, k) = 300.0f;
-  ctsurg::write_hu_volume_file(dir / "ct.h5", v, test_provenance());
+  write_block_ct(dir, false);
   const auto no_iso = run_tool("ctsurg-surface", {(dir / "ct.h5").string(), (dir / "s.h5").string()});
   EXPECT_EQ(no_iso.exit_code, 2) << no_iso.output;
   EXPECT_NE(no_iso.output.find("--iso"), std::string::npos) << no_iso.output;
@@ -164,6 +160,53 @@ TEST(CtsurgSurface, HuVolumeNeedsIso) {
   // corners: 5^3 + 6 * 5^2 d + 12 * 5 d^2 / 2 + 8 d^3 / 6.
   const double d = 150.0 / 1300.0;
   EXPECT_NEAR(enclosed_volume(m), 125.0 + 150.0 * d + 30.0 * d * d + 8.0 * d * d * d / 6.0, 1e-3);
+}
+
+TEST(CtsurgSurface, ClosesTheSurfaceAtTheLatticeBorderUnlessAskedNotTo) {
+  TempDir dir;
+  const fs::path ct = write_block_ct(dir, true);
+  const auto closed = run_tool("ctsurg-surface", {ct.string(), (dir / "c.h5").string(), "--iso", "150"});
+  ASSERT_EQ(closed.exit_code, 0) << closed.output;
+  EXPECT_NE(closed.output.find("closing the surface"), std::string::npos) << closed.output;
+  const auto c = ctsurg::read_surface_mesh_file(dir / "c.h5");
+  EXPECT_TRUE(closed_and_oriented(c));
+  EXPECT_EQ(c.lattice.dims[0], 14);  // the one-node frame
+  // The block reaches past its border nodes towards the frame: more than the 5^3 mm of a block
+  // whose surface stops at its outermost nodes.
+  EXPECT_GT(enclosed_volume(c), 5.0 * 5.0 * 5.5);
+  const auto open = run_tool("ctsurg-surface", {ct.string(), (dir / "o.h5").string(), "--iso", "150", "--open-border"});
+  ASSERT_EQ(open.exit_code, 0) << open.output;
+  EXPECT_NE(open.output.find("open there"), std::string::npos) << open.output;
+  const auto o = ctsurg::read_surface_mesh_file(dir / "o.h5");
+  EXPECT_FALSE(closed_and_oriented(o));
+  EXPECT_EQ(o.lattice.dims[0], 12);
+}
+
+// --smooth and --decimate: still closed, fewer triangles, the ball's volume, and the lattice tie
+// recomputed so that the weights reproduce the moved vertices.
+TEST(CtsurgSurface, SmoothedAndDecimatedSurfaceStaysClosedAndTied) {
+  TempDir dir;
+  const fs::path grid = write_grid(dir, "g.h5");
+  ASSERT_EQ(run_tool("ctsurg-surface", {grid.string(), (dir / "full.h5").string()}).exit_code, 0);
+  const auto r = run_tool("ctsurg-surface", {grid.string(), (dir / "s.h5").string(), "--smooth", "10", "--decimate", "400"});
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto full = ctsurg::read_surface_mesh_file(dir / "full.h5");
+  const auto m = ctsurg::read_surface_mesh_file(dir / "s.h5");
+  EXPECT_TRUE(closed_and_oriented(m));
+  EXPECT_LE(m.triangle_count(), 402);
+  EXPECT_LT(m.triangle_count(), full.triangle_count() / 2);
+  const double ball = 4.0 / 3.0 * std::numbers::pi * std::pow(kRadiusMm, 3);
+  EXPECT_NEAR(enclosed_volume(m), ball, 0.05 * ball);
+  ASSERT_EQ(m.grid_weights.size(), 8 * static_cast<std::size_t>(m.vertex_count()));
+  for (int64_t v = 0; v < m.vertex_count(); ++v) {
+    const auto i = static_cast<std::size_t>(v);
+    Eigen::Vector3d p = Eigen::Vector3d::Zero();
+    for (int c = 0; c < 8; ++c)
+      p += double(m.grid_weights[8 * i + static_cast<std::size_t>(c)]) *
+           m.lattice.index_to_world(Eigen::Vector3d(m.grid_cell[3 * i] + (c & 1), m.grid_cell[3 * i + 1] + ((c >> 1) & 1),
+                                                    m.grid_cell[3 * i + 2] + ((c >> 2) & 1)));
+    ASSERT_LT((p - ctsurg::test::vertex(m, static_cast<uint32_t>(v))).norm(), 1e-3) << "vertex " << v;
+  }
 }
 
 TEST(CtsurgSurface, BadInputExitsTwoAndLeavesNoFile) {
@@ -182,6 +225,8 @@ TEST(CtsurgSurface, BadInputExitsTwoAndLeavesNoFile) {
   expect_bad({(dir / "missing.h5").string(), (dir / "s.h5").string()}, "missing.h5");
   expect_bad({grid.string(), (dir / "no_such_folder" / "s.h5").string()}, "no_such_folder");
   expect_bad({grid.string(), (dir / "s.h5").string(), "--iso", "nan"}, "--iso");
+  expect_bad({grid.string(), (dir / "s.h5").string(), "--decimate", "2"}, "--decimate");
+  expect_bad({grid.string(), (dir / "s.h5").string(), "--smooth", "-1"}, "--smooth");
 }
 
 }  // namespace
