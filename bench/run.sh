@@ -104,3 +104,53 @@ awk -v f="$out" '
   !skip' "$doc" >"$WORK/doc" && mv "$WORK/doc" "$doc"
 echo "bench/run.sh: wrote $doc"
 cat "$out"
+
+# Tetrahedral meshes: ctsurg-tetmesh (CGAL Mesh_3) on the heart grid against TetGen (when installed)
+# meshing the marching-cubes surface of the same grid at a similar tet count. TetGen's mesh is rated
+# by bench/tet_quality.py with the measures of mesh/include/ctsurg/mesh/tet_mesh_quality.h.
+tet=$WORK/tetmesh.md
+heart_grid=$WORK/grid_heart_2.4mm.h5
+if [[ -e $heart_grid ]]; then
+  {
+    echo "## Tetrahedral meshes: heart (\`bench/run.sh\`)"
+    echo
+    echo "Machine: $(lscpu | awk -F: '/Model name/{gsub(/^ +/,"",$2); print $2}') ($(nproc) cores), $(free -g | awk '/Mem:/{print $2}') GiB;"
+    echo "date: $(date -u +%Y-%m-%d); ctsurg $(git describe --always --dirty 2>/dev/null || echo unknown), Release build;"
+    echo "$(command -v tetgen >/dev/null && dpkg-query -W -f='TetGen ${Version} (Debian)' tetgen 2>/dev/null || echo 'TetGen absent')."
+    echo "The bundled heart's occupancy grid (2.4 mm cells). ctsurg-tetmesh meshes the full-resolution mask with its"
+    echo "defaults (cell and facet size 2.4 mm, facet distance 0.75 mm, radius-edge 2, facet angle 25 deg, sliver"
+    echo "perturbation and exudation towards 12 deg), without and with ODT smoothing; TetGen meshes the grid's"
+    echo "marching-cubes surface (\`ctsurg-surface grid.h5 heart.ply\`) with \`-pYq1.414a6\` (surface kept, radius-edge"
+    echo "1.414, tets up to 6 mm^3: a similar tet count). Wall time best of $REPEAT (TetGen: meshing only), peak"
+    echo "resident memory; slivers: tets with a dihedral angle under 10 deg; mask voxel volume 668,844 mm^3."
+    echo
+    echo "| mesher | nodes | tets | min dihedral (deg) | max dihedral (deg) | slivers | mean / max radius-edge | volume (mm^3) | time (s) | peak memory (MiB) |"
+    echo "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
+  } >"$tet"
+  for opt in none odt; do
+    read -r s m < <(best_of "$BIN/ctsurg-tetmesh" "$heart_grid" "$WORK/heart_tet.h5" --optimiser "$opt")
+    read -r nodes tets < <(sed -nE 's/.*tetmesh: ([0-9]+) nodes, ([0-9]+) tets.*/\1 \2/p' "$WORK/err")
+    read -r dmin dmax sl < <(sed -nE 's/.*dihedral angles ([0-9.]+) \.\. ([0-9.]+) deg; ([0-9]+) slivers.*/\1 \2 \3/p' "$WORK/err")
+    read -r remax remean < <(sed -nE 's/.*radius-edge ratio [0-9.]+ \.\. ([0-9.]+), mean ([0-9.]+).*/\1 \2/p' "$WORK/err")
+    vol=$(sed -nE 's/.*mesh volume ([0-9.]+) mm\^3.*/\1/p' "$WORK/err")
+    printf '| ctsurg-tetmesh (CGAL Mesh_3, optimiser %s) | %s | %s | %s | %s | %s | %s / %s | %.0f | %.2f | %d |\n' \
+      "$opt" "$nodes" "$tets" "$dmin" "$dmax" "$sl" "$remean" "$remax" "$vol" "$s" $((m / 1024)) >>"$tet"
+  done
+  PYTHON=python3  # bench/tet_quality.py needs numpy: the system Python has it (python3-numpy)
+  [[ -x /usr/bin/python3 ]] && PYTHON=/usr/bin/python3
+  if command -v tetgen >/dev/null; then
+    "$BIN/ctsurg-surface" "$heart_grid" "$WORK/heart.ply" -q
+    read -r s m < <(best_of tetgen -pYq1.414a6 -Q "$WORK/heart.ply")
+    read -r nodes tets dmin dmax sl remean remax vol _ < <("$PYTHON" bench/tet_quality.py "$WORK/heart.1")
+    printf '| TetGen -pYq1.414a6 (marching-cubes surface) | %s | %s | %s | %s | %s | %s / %s | %.0f | %.2f | %d |\n' \
+      "$nodes" "$tets" "$dmin" "$dmax" "$sl" "$remean" "$remax" "$vol" "$s" $((m / 1024)) >>"$tet"
+  else
+    echo "| TetGen | not installed (\`apt-get install tetgen\`): skipped | | | | | | | | |" >>"$tet"
+  fi
+  grep -q '<!-- bench:tetmesh:start -->' "$doc" || printf '\n<!-- bench:tetmesh:start -->\n<!-- bench:tetmesh:end -->\n' >>"$doc"
+  awk -v f="$tet" '
+    /<!-- bench:tetmesh:start -->/ {print; while ((getline l < f) > 0) print l; skip=1; next}
+    /<!-- bench:tetmesh:end -->/ {skip=0}
+    !skip' "$doc" >"$WORK/doc" && mv "$WORK/doc" "$doc"
+  cat "$tet"
+fi

@@ -1,0 +1,164 @@
+// ctsurg-tetmesh as a user runs it: an occupancy grid of a ball (full-resolution mask and grid
+// labels) written with write_occupancy_grid_file, then the tool's .h5 / .vtu / .msh / .mesh outputs,
+// byte-identical reruns and bad-input handling (exit 2, a message naming the problem, no file left).
+#include "ctsurg/core/occupancy_grid_file.h"
+#include "ctsurg/core/provenance.h"
+#include "ctsurg/core/tet_mesh_file.h"
+#include "test_support.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+#include <numbers>
+#include <sstream>
+
+namespace fs = std::filesystem;
+using ctsurg::test::run_tool;
+using ctsurg::test::TempDir;
+
+namespace {
+
+constexpr double kRadiusMm = 8.0;
+
+ctsurg::Provenance test_provenance() { return {"test", "0", {}, {}, nlohmann::json::array()}; }
+
+// A ball of radius 8 mm: the mask on 1 mm voxels, the grid on 2 mm cells; `empty` gives no tissue.
+fs::path write_grid(const TempDir& dir, const std::string& name, bool empty = false) {
+  ctsurg::ImageGeometry mg;
+  mg.dims = {22, 21, 20};
+  mg.origin = Eigen::Vector3d(-17.0, -16.0, 85.0);
+  const Eigen::Vector3d centre = mg.index_to_world(Eigen::Vector3d(10.5, 10.0, 9.5));
+  ctsurg::ImageGeometry gg = mg;
+  gg.dims = {11, 11, 10};
+  gg.spacing = Eigen::Vector3d::Constant(2.0);
+  gg.origin = mg.origin + Eigen::Vector3d::Constant(0.5);
+  ctsurg::OccupancyGrid grid;
+  grid.mask = ctsurg::Volume<uint16_t>(mg, 0);
+  grid.fraction = ctsurg::Volume<float>(gg, 0.0f);
+  grid.occupancy = ctsurg::Volume<uint8_t>(gg, 0);
+  grid.label = ctsurg::Volume<uint16_t>(gg, 0);
+  for (int64_t k = 0; k < mg.dims[2] && !empty; ++k)
+    for (int64_t j = 0; j < mg.dims[1]; ++j)
+      for (int64_t i = 0; i < mg.dims[0]; ++i)
+        grid.mask(i, j, k) = (mg.index_to_world(Eigen::Vector3d(double(i), double(j), double(k))) - centre).norm() <= kRadiusMm;
+  for (int64_t k = 0; k < gg.dims[2] && !empty; ++k)
+    for (int64_t j = 0; j < gg.dims[1]; ++j)
+      for (int64_t i = 0; i < gg.dims[0]; ++i) {
+        const bool in = (gg.index_to_world(Eigen::Vector3d(double(i), double(j), double(k))) - centre).norm() <= kRadiusMm;
+        grid.fraction(i, j, k) = in ? 1.0f : 0.0f;
+        grid.occupancy(i, j, k) = in;
+        grid.label(i, j, k) = in;
+      }
+  grid.label_names = {{1, "ball"}};
+  const fs::path p = dir / name;
+  ctsurg::write_occupancy_grid_file(p, grid, test_provenance());
+  return p;
+}
+
+std::string read_bytes(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+const double kBall = 4.0 / 3.0 * std::numbers::pi * std::pow(kRadiusMm, 3);
+
+TEST(CtsurgTetmesh, GridToTetMeshFileWithQualityReport) {
+  TempDir dir;
+  const fs::path grid = write_grid(dir, "ball_grid.h5");
+  const auto r = run_tool("ctsurg-tetmesh", {grid.string(), (dir / "ball.h5").string(), "--cell-size", "3", "--facet-size",
+                                             "1.5", "--facet-distance", "0.3"});
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  for (const char* says : {"tets expected", "dihedral angles", "slivers", "radius-edge histogram", "vs mask voxels"})
+    EXPECT_NE(r.output.find(says), std::string::npos) << says << "\n" << r.output;
+  ASSERT_TRUE(fs::exists(dir / "ball.xdmf"));
+  EXPECT_NE(read_bytes(dir / "ball.xdmf").find("TopologyType=\"Tetrahedron\""), std::string::npos);
+  const auto m = ctsurg::read_tet_mesh_file(dir / "ball.h5");
+  EXPECT_GT(m.tet_count(), 300);
+  EXPECT_EQ(m.quality.inverted, 0);
+  EXPECT_EQ(m.quality.slivers, 0);
+  EXPECT_NEAR(m.quality.volume_mm3, kBall, 0.05 * kBall);
+  EXPECT_NEAR(m.mask_volume_mm3, kBall, 0.05 * kBall);
+  EXPECT_NE(m.criteria.find("\"cell_size_mm\":3.0"), std::string::npos) << m.criteria;
+  EXPECT_NE(m.criteria.find("\"facet_size_mm\":1.5"), std::string::npos) << m.criteria;
+
+  // The coarse grid labels instead of the mask: a similar ball, fewer details.
+  const auto g = run_tool("ctsurg-tetmesh", {grid.string(), (dir / "coarse.h5").string(), "--source", "grid"});
+  ASSERT_EQ(g.exit_code, 0) << g.output;
+  const auto c = ctsurg::read_tet_mesh_file(dir / "coarse.h5");
+  EXPECT_EQ(c.quality.inverted, 0);
+  EXPECT_NEAR(c.quality.volume_mm3, kBall, 0.25 * kBall);
+  // Defaults: the cell size is the grid's (2 mm), the facet size the cell size, the facet distance
+  // the larger of half a voxel and a quarter of the cell size.
+  EXPECT_NE(c.criteria.find("\"cell_size_mm\":2.0"), std::string::npos) << c.criteria;
+  EXPECT_NE(c.criteria.find("\"facet_size_mm\":2.0"), std::string::npos) << c.criteria;
+  EXPECT_NE(c.criteria.find("\"facet_distance_mm\":1.0"), std::string::npos) << c.criteria;
+}
+
+TEST(CtsurgTetmesh, ExportsVtuMshMesh) {
+  TempDir dir;
+  const fs::path grid = write_grid(dir, "g.h5");
+  for (const std::string name : {"m.vtu", "m.msh", "m.mesh"}) {
+    const auto r = run_tool("ctsurg-tetmesh", {grid.string(), (dir / name).string(), "--cell-size", "3"});
+    ASSERT_EQ(r.exit_code, 0) << name << ": " << r.output;
+    ASSERT_GT(fs::file_size(dir / name), 1000u) << name;
+  }
+  EXPECT_NE(read_bytes(dir / "m.vtu").find("<VTKFile type=\"UnstructuredGrid\""), std::string::npos);
+  EXPECT_EQ(read_bytes(dir / "m.msh").substr(0, 24), "$MeshFormat\n4.1 0 8\n$End");
+  EXPECT_EQ(read_bytes(dir / "m.mesh").substr(0, 22), "MeshVersionFormatted 2");
+  for (const auto& f : ctsurg::test::files_in(dir.path())) EXPECT_EQ(f.filename().string().rfind(".tmp-", 0), std::string::npos) << f;
+}
+
+TEST(CtsurgTetmesh, RerunIsByteIdentical) {
+  TempDir dir;
+  const fs::path grid = write_grid(dir, "g.h5");
+  const std::vector<std::string> args = {grid.string(), (dir / "s.h5").string(), "--cell-size", "3"};
+  ASSERT_EQ(run_tool("ctsurg-tetmesh", args).exit_code, 0);
+  const std::string h5 = read_bytes(dir / "s.h5"), xdmf = read_bytes(dir / "s.xdmf");
+  ASSERT_EQ(run_tool("ctsurg-tetmesh", args).exit_code, 0);
+  EXPECT_TRUE(read_bytes(dir / "s.h5") == h5);
+  EXPECT_TRUE(read_bytes(dir / "s.xdmf") == xdmf);
+  const std::vector<std::string> vtu = {grid.string(), (dir / "s.vtu").string(), "--cell-size", "3"};
+  ASSERT_EQ(run_tool("ctsurg-tetmesh", vtu).exit_code, 0);
+  const std::string first = read_bytes(dir / "s.vtu");
+  ASSERT_EQ(run_tool("ctsurg-tetmesh", vtu).exit_code, 0);
+  EXPECT_TRUE(read_bytes(dir / "s.vtu") == first);
+}
+
+TEST(CtsurgTetmesh, BadInputExitsTwoAndLeavesNoFile) {
+  TempDir dir;
+  const fs::path grid = write_grid(dir, "g.h5");
+  const fs::path empty = write_grid(dir, "empty.h5", true);
+  const auto expect_bad = [&](const std::vector<std::string>& args, const std::string& says) {
+    const auto before = ctsurg::test::files_in(dir.path());
+    const auto r = run_tool("ctsurg-tetmesh", args);
+    EXPECT_EQ(r.exit_code, 2) << r.output;
+    EXPECT_NE(r.output.find(says), std::string::npos) << r.output;
+    EXPECT_EQ(ctsurg::test::files_in(dir.path()), before) << r.output;
+  };
+  const std::string out = (dir / "m.h5").string();
+  expect_bad({empty.string(), out}, "nothing to mesh");
+  expect_bad({grid.string(), out, "--labels", "5"}, "no voxel has label 5");
+  expect_bad({grid.string(), out, "--labels", "1,x"}, "--labels");
+  expect_bad({grid.string(), out, "--cell-size", "0"}, "--cell-size");
+  expect_bad({grid.string(), out, "--cell-size", "-2"}, "--cell-size");
+  expect_bad({grid.string(), out, "--facet-distance", "0"}, "--facet-distance");
+  expect_bad({grid.string(), out, "--facet-angle", "40"}, "--facet-angle");
+  expect_bad({grid.string(), out, "--radius-edge", "0.5"}, "--radius-edge");
+  expect_bad({grid.string(), out, "--cell-size", "0.05", "--facet-size", "0.05"}, "--max-cells");
+  expect_bad({grid.string(), out, "--max-cells", "50"}, "--max-cells");
+  expect_bad({grid.string(), (dir / "m.vtk").string()}, "unknown output format");
+  expect_bad({(dir / "missing.h5").string(), out}, "missing.h5");
+  expect_bad({grid.string(), (dir / "no_such_folder" / "m.h5").string()}, "no_such_folder");
+  // The memory guard: a fine mesh that cannot fit in the memory allowed.
+  const auto before = ctsurg::test::files_in(dir.path());
+  const auto r = ctsurg::test::run_shell("CTSURG_MAX_MEMORY_MB=20 " + std::string(CTSURG_TOOL_DIR) + "/ctsurg-tetmesh " +
+                                         grid.string() + " " + out + " --cell-size 0.3 --facet-size 0.3");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("--cell-size 0.3"), std::string::npos) << r.output;
+  EXPECT_EQ(ctsurg::test::files_in(dir.path()), before);
+}
+
+}  // namespace
