@@ -95,15 +95,23 @@ grid_case head_otsu "$WORK/head_nrrd.h5" -- --otsu --voxel-mm 3.2 --keep-largest
       printf "| %.1f | %s | %.1f | %.3g | %d |\n", c/10, t, $3, $7, $(NF)}'
 } >>"$out"
 
-# Splice into docs/benchmarks.md between the preprocess markers (other stages keep their sections).
+# splice SECTION FILE: puts FILE between <!-- bench:SECTION:start/end --> in docs/benchmarks.md
+# (appending the markers when absent); the other sections stay as they are.
 doc=docs/benchmarks.md
-[[ -f $doc ]] || printf '# Benchmarks\n\nRerun with `bench/run.sh`.\n\n<!-- bench:preprocess:start -->\n<!-- bench:preprocess:end -->\n' >"$doc"
-awk -v f="$out" '
-  /<!-- bench:preprocess:start -->/ {print; while ((getline l < f) > 0) print l; skip=1; next}
-  /<!-- bench:preprocess:end -->/ {skip=0}
-  !skip' "$doc" >"$WORK/doc" && mv "$WORK/doc" "$doc"
-echo "bench/run.sh: wrote $doc"
-cat "$out"
+[[ -f $doc ]] || printf '# Benchmarks\n\nRerun with `bench/run.sh`.\n' >"$doc"
+splice() {
+  local section=$1 file=$2
+  grep -q "<!-- bench:$section:start -->" "$doc" || printf '\n<!-- bench:%s:start -->\n<!-- bench:%s:end -->\n' "$section" "$section" >>"$doc"
+  awk -v f="$file" -v a="<!-- bench:$section:start -->" -v b="<!-- bench:$section:end -->" '
+    $0 == a {print; while ((getline l < f) > 0) print l; skip=1; next}
+    $0 == b {skip=0}
+    !skip' "$doc" >"$WORK/doc" && mv "$WORK/doc" "$doc"
+  cat "$file"
+}
+machine_line() {
+  echo "Machine: $(lscpu | awk -F: '/Model name/{gsub(/^ +/,"",$2); print $2}') ($(nproc) cores), $(free -g | awk '/Mem:/{print $2}') GiB;"
+}
+splice preprocess "$out"
 
 # Tetrahedral meshes: ctsurg-tetmesh (CGAL Mesh_3) on the heart grid against TetGen (when installed)
 # meshing the marching-cubes surface of the same grid at a similar tet count. TetGen's mesh is rated
@@ -147,10 +155,46 @@ if [[ -e $heart_grid ]]; then
   else
     echo "| TetGen | not installed (\`apt-get install tetgen\`): skipped | | | | | | | | |" >>"$tet"
   fi
-  grep -q '<!-- bench:tetmesh:start -->' "$doc" || printf '\n<!-- bench:tetmesh:start -->\n<!-- bench:tetmesh:end -->\n' >>"$doc"
-  awk -v f="$tet" '
-    /<!-- bench:tetmesh:start -->/ {print; while ((getline l < f) > 0) print l; skip=1; next}
-    /<!-- bench:tetmesh:end -->/ {skip=0}
-    !skip' "$doc" >"$WORK/doc" && mv "$WORK/doc" "$doc"
-  cat "$tet"
+  splice tetmesh "$tet"
 fi
+
+# Marching cubes: ctsurg's (bench_marching_cubes, Google Benchmark, median of 5 repetitions) against
+# VTK's vtkFlyingEdges3D (tests/peers/flying_edges_peer.py --time, median of 15 runs) on the same
+# fields, 1 and 2 threads. VTK computes normals; ctsurg computes normals and the grid tie.
+mc=$WORK/surface.md
+PEER=$ROOT/tests/peers/flying_edges_peer.py
+if [[ -e $WORK/heart_nifti.h5 && -e $heart_grid ]] && /usr/bin/python3 -c 'import vtk, h5py' 2>/dev/null; then
+  "$BIN/ctsurg-grid" "$WORK/heart_nifti.h5" "$ROOT/data_samples/heart/heart_mask.nii.gz" "$WORK/grid_heart_1mm.h5" --voxel-mm 1.0 --no-preview -q
+  {
+    echo "## Mesh: marching cubes against VTK (\`bench/run.sh\`)"
+    echo
+    machine_line
+    echo "date: $(date -u +%Y-%m-%d); ctsurg $(git describe --always --dirty 2>/dev/null || echo unknown), Release build;"
+    echo "VTK $(/usr/bin/python3 -c 'import vtk; print(vtk.vtkVersion.GetVTKVersion(), "(Debian python3-vtk9, SMP backend", vtk.vtkSMPTools.GetBackend() + ")")')."
+    echo "Median wall time of the isosurface extraction alone (field in memory, mesh in memory): ctsurg's"
+    echo "\`marching_cubes\` (normals from the field gradient and the grid tie: cell, 8 trilinear weights and the"
+    echo "nearest inside node per vertex) against \`vtkFlyingEdges3D\` with gradient normals. Nodes per second is"
+    echo "the lattice size over the time. Both give the same vertex and triangle counts (docs/mesh.md)."
+    echo
+    echo "| field | nodes | triangles | threads | ctsurg (ms) | VTK (ms) | ctsurg nodes/s | VTK nodes/s | ctsurg / VTK speed |"
+    echo "|---|---:|---:|---:|---:|---:|---:|---:|---:|"
+  } >"$mc"
+  "$BIN/bench_marching_cubes" --benchmark_repetitions=5 --benchmark_report_aggregates_only=true --benchmark_format=csv 2>/dev/null |
+    awk -F, '/_median"?,/{gsub(/"/,"",$1); split($1,p,"/"); print p[1], p[2], $3}' >"$WORK/mc.txt"
+  mc_row() {  # label bench-name field.h5 dataset iso
+    local label=$1 name=$2 field=$3 dataset=$4 iso=$5
+    for t in 1 2; do
+      local ours vtk_json vtk_s nodes tris
+      ours=$(awk -v n="$name" -v t="$t" '$1 == n && $2 == t {print $3}' "$WORK/mc.txt")
+      vtk_json=$(/usr/bin/python3 "$PEER" "$field" "$dataset" "$iso" --time "$t")
+      read -r vtk_s nodes tris < <(/usr/bin/python3 -c 'import json,sys; d=json.loads(sys.argv[1]); print(d["seconds"], d["nodes"], d["triangles"])' "$vtk_json")
+      awk -v l="$label" -v n="$nodes" -v tr="$tris" -v t="$t" -v o="$ours" -v v="$vtk_s" 'BEGIN{
+        printf "| %s | %d | %d | %d | %.2f | %.2f | %.3g | %.3g | %.2f |\n", l, n, tr, t, o, v * 1000, n / (o / 1000), n / v, v * 1000 / o}' >>"$mc"
+    done
+  }
+  mc_row "heart CT, 150 HU" BM_MarchingCubesHeartCt150HU "$WORK/heart_nifti.h5" /hu 150
+  mc_row "heart grid 2.4 mm, fraction 0.5" BM_MarchingCubesHeartGrid2_4mm "$heart_grid" /grid/fraction 0.5
+  mc_row "heart grid 1.0 mm, fraction 0.5" BM_MarchingCubesHeartGrid1_0mm "$WORK/grid_heart_1mm.h5" /grid/fraction 0.5
+  splice surface "$mc"
+fi
+echo "bench/run.sh: wrote $doc"

@@ -45,6 +45,33 @@ void check_sizes(const SurfaceMesh& m, const std::string& file) {
       m.nearest_node.size() != 3 * nv) {
     throw InputError(file, "/surface", "per-vertex arrays differ in length from the vertex array");
   }
+  if ((!m.uvs.empty() && m.uvs.size() != 2 * nv) || (!m.tangents.empty() && m.tangents.size() != 4 * nv) ||
+      (!m.source_vertex.empty() && m.source_vertex.size() != nv)) {
+    throw InputError(file, "/surface",
+                     "optional per-vertex arrays (uvs, tangents, source_vertex) differ in length from the vertex array");
+  }
+  for (const float u : m.uvs) {
+    if (!(u >= 0.0f && u <= 1.0f)) throw InputError(file, "/surface/uvs", "texture coordinates must lie in [0, 1]");
+  }
+  for (const uint32_t v : m.source_vertex) {
+    if (v >= static_cast<uint64_t>(m.source_vertex_count)) {
+      throw InputError(file, "/surface/source_vertex", "index " + std::to_string(v) + " is not below @source_vertices (" +
+                                                            std::to_string(m.source_vertex_count) + ")");
+    }
+  }
+  const NormalMapImage& img = m.normal_map;
+  if (!img.empty()) {
+    if (img.width <= 0 || img.height <= 0 || img.rgb.size() != static_cast<std::size_t>(3 * img.width * img.height)) {
+      throw InputError(file, "/surface/normal_map", "size does not match width x height x 3");
+    }
+    if (img.bits != 8 && img.bits != 16) throw InputError(file, "/surface/normal_map", "bits must be 8 or 16");
+    if (img.bits == 8) {
+      for (const uint16_t c : img.rgb) {
+        if (c > 255) throw InputError(file, "/surface/normal_map", "an 8-bit map holds a value above 255");
+      }
+    }
+    if (m.uvs.empty()) throw InputError(file, "/surface/normal_map", "a normal map needs texture coordinates (uvs)");
+  }
 }
 
 }  // namespace
@@ -81,6 +108,24 @@ void write_surface_mesh_file(const std::filesystem::path& path, const SurfaceMes
         s.write_dataset("grid_cell", mesh.grid_cell, v3);
         s.write_dataset("grid_weights", mesh.grid_weights, v8);
         s.write_dataset("nearest_node", mesh.nearest_node, v3);
+        if (!mesh.uvs.empty()) s.write_dataset("uvs", mesh.uvs, std::array<uint64_t, 2>{nv, 2});
+        if (!mesh.tangents.empty()) s.write_dataset("tangents", mesh.tangents, std::array<uint64_t, 2>{nv, 4});
+        if (!mesh.source_vertex.empty()) {
+          s.write_dataset("source_vertex", mesh.source_vertex, std::array<uint64_t, 1>{nv});
+          s.set_attribute("source_vertices", mesh.source_vertex_count);
+        }
+        const NormalMapImage& img = mesh.normal_map;
+        if (!img.empty()) {
+          const std::array<uint64_t, 3> shape{static_cast<uint64_t>(img.height), static_cast<uint64_t>(img.width), 3};
+          if (img.bits == 8) {
+            const std::vector<uint8_t> bytes(img.rgb.begin(), img.rgb.end());
+            s.write_dataset("normal_map", bytes, shape);
+          } else {
+            s.write_dataset("normal_map", img.rgb, shape);
+          }
+          s.set_attribute("normal_map_space", std::string("tangent"));
+          s.set_attribute("normal_map_bits", static_cast<int64_t>(img.bits));
+        }
       },
       surface_xdmf(path.filename().string(), mesh.vertex_count(), mesh.triangle_count()));
 }
@@ -106,6 +151,23 @@ SurfaceMesh read_surface_mesh_file(const std::filesystem::path& path) {
   read("grid_cell", m.grid_cell, 3, nv);
   read("grid_weights", m.grid_weights, 8, nv);
   read("nearest_node", m.nearest_node, 3, nv);
+  if (s.has("uvs")) read("uvs", m.uvs, 2, nv);
+  if (s.has("tangents")) read("tangents", m.tangents, 4, nv);
+  if (s.has("source_vertex")) {
+    m.source_vertex = s.read_dataset<uint32_t>("source_vertex", &shape);
+    if (shape.size() != 1 || shape[0] != nv) throw InputError(file, s.path() + "/source_vertex", "expected shape (#V)");
+    m.source_vertex_count = s.int_attribute("source_vertices");
+  }
+  if (s.has("normal_map")) {
+    m.normal_map.rgb = s.read_dataset<uint16_t>("normal_map", &shape);
+    if (shape.size() != 3 || shape[2] != 3) throw InputError(file, s.path() + "/normal_map", "expected shape (H, W, 3)");
+    m.normal_map.height = static_cast<int64_t>(shape[0]);
+    m.normal_map.width = static_cast<int64_t>(shape[1]);
+    m.normal_map.bits = static_cast<int>(s.int_attribute("normal_map_bits"));
+    if (s.string_attribute("normal_map_space") != "tangent") {
+      throw InputError(file, s.path() + "@normal_map_space", "only tangent-space normal maps are known");
+    }
+  }
   for (const uint32_t t : m.triangles) {
     if (t >= nv) throw InputError(file, s.path() + "/triangles", "vertex index " + std::to_string(t) + " out of range");
   }

@@ -1,15 +1,129 @@
 #include "ctsurg/mesh/surface_export.h"
 
 #include "ctsurg/core/error.h"
+#include "ctsurg/mesh/normal_map_png.h"
 
 #include <assimp/Exporter.hpp>
 #include <assimp/material.h>
 #include <assimp/scene.h>
 
+#include <nlohmann/json.hpp>
+
 #include <algorithm>
+#include <array>
 #include <cctype>
+#include <cstring>
+#include <fstream>
+#include <map>
+#include <sstream>
 
 namespace ctsurg {
+
+namespace {
+
+std::string read_file(const std::filesystem::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+void write_file(const std::filesystem::path& p, const std::string& bytes, const std::string& named) {
+  std::ofstream out(p, std::ios::binary | std::ios::trunc);
+  out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+  if (!out.flush()) throw RuntimeError(named + ": write failed");
+}
+
+void append_u32(std::string& s, uint32_t v) { s.append(reinterpret_cast<const char*>(&v), 4); }
+
+// Assimp 5.2's glTF 2 exporter drops tangents, so they are added after it: #V x 4 float32
+// tangents are appended to the binary buffer (the GLB's BIN chunk, or the .bin beside a .gltf) as a
+// new buffer view and a VEC4 accessor, and the primitive's attributes get TANGENT (glTF 2.0,
+// section 3.7.2.1: xyz unit tangent, w = +-1 handedness; the same convention as ctsurg's). The
+// exporter joins identical vertices (its enforced aiProcess_JoinIdenticalVertices), so each
+// exported vertex is matched to the mesh vertex with the same position and texture coordinates
+// (bit for bit: the joined vertex keeps the data of its first copy; v is compared after the same
+// two float flips, ours and the exporter's, that produced the written value).
+void add_gltf_tangents(const std::filesystem::path& path, bool binary, const SurfaceMesh& mesh, const std::string& named) {
+  std::string file = read_file(path), bin;
+  nlohmann::json j;
+  std::filesystem::path bin_path;
+  if (binary) {
+    uint32_t json_len = 0, bin_len = 0;
+    if (file.size() < 28 || file.compare(0, 4, "glTF") != 0) throw RuntimeError(named + ": unexpected GLB layout");
+    std::memcpy(&json_len, file.data() + 12, 4);
+    if (28 + static_cast<std::size_t>(json_len) > file.size()) throw RuntimeError(named + ": unexpected GLB layout");
+    j = nlohmann::json::parse(file.substr(20, json_len));
+    std::memcpy(&bin_len, file.data() + 20 + json_len, 4);
+    bin = file.substr(28 + json_len, bin_len);
+  } else {
+    j = nlohmann::json::parse(file);
+    bin_path = path.parent_path() / j.at("buffers").at(0).at("uri").get<std::string>();
+    bin = read_file(bin_path);
+  }
+  auto& primitive = j.at("meshes").at(0).at("primitives").at(0);
+  // The floats of a tightly packed float accessor.
+  const auto floats = [&](const char* attribute, std::size_t width) {
+    const auto& a = j.at("accessors").at(primitive.at("attributes").at(attribute).get<std::size_t>());
+    const auto& view = j.at("bufferViews").at(a.at("bufferView").get<std::size_t>());
+    const std::size_t count = a.at("count").get<std::size_t>();
+    const std::size_t offset = view.value("byteOffset", std::size_t{0}) + a.value("byteOffset", std::size_t{0});
+    if (view.value("byteStride", 4 * width) != 4 * width || offset + 4 * width * count > bin.size()) {
+      throw RuntimeError(named + ": unexpected glTF accessor layout");
+    }
+    std::vector<float> out(width * count);
+    std::memcpy(out.data(), bin.data() + offset, out.size() * sizeof(float));
+    return out;
+  };
+  const std::vector<float> pos = floats("POSITION", 3), uv = floats("TEXCOORD_0", 2);
+  const std::size_t n = pos.size() / 3;
+  using Key = std::array<uint32_t, 5>;
+  const auto key_of = [](const float* p, float u, float v) {
+    Key k;
+    std::memcpy(k.data(), p, 12);
+    std::memcpy(&k[3], &u, 4);
+    std::memcpy(&k[4], &v, 4);
+    return k;
+  };
+  std::map<Key, std::size_t> index;
+  for (std::size_t v = 0; v < static_cast<std::size_t>(mesh.vertex_count()); ++v) {
+    const float flipped = 1.0f - mesh.uvs[2 * v + 1];  // ours (export_surface_mesh)
+    index.emplace(key_of(&mesh.vertices[3 * v], mesh.uvs[2 * v], 1.0f - flipped), v);  // the exporter's
+  }
+  std::vector<float> tangents(4 * n);
+  for (std::size_t v = 0; v < n; ++v) {
+    const auto it = index.find(key_of(&pos[3 * v], uv[2 * v], uv[2 * v + 1]));
+    if (it == index.end()) throw RuntimeError(named + ": an exported vertex matches no mesh vertex; cannot add tangents");
+    std::copy_n(&mesh.tangents[4 * it->second], 4, &tangents[4 * v]);
+  }
+  while (bin.size() % 4 != 0) bin.push_back('\0');
+  const std::size_t offset = bin.size();
+  bin.append(reinterpret_cast<const char*>(tangents.data()), tangents.size() * sizeof(float));
+  j["bufferViews"].push_back(
+      {{"buffer", 0}, {"byteOffset", offset}, {"byteLength", tangents.size() * sizeof(float)}, {"target", 34962}});
+  j["accessors"].push_back({{"bufferView", j["bufferViews"].size() - 1}, {"byteOffset", 0}, {"componentType", 5126},
+                            {"count", n}, {"type", "VEC4"}});
+  primitive["attributes"]["TANGENT"] = j["accessors"].size() - 1;
+  j["buffers"][0]["byteLength"] = bin.size();
+  std::string text = j.dump();
+  if (!binary) {
+    write_file(bin_path, bin, named);
+    write_file(path, text, named);
+    return;
+  }
+  while (text.size() % 4 != 0) text.push_back(' ');
+  while (bin.size() % 4 != 0) bin.push_back('\0');
+  std::string glb = "glTF";
+  append_u32(glb, 2);
+  append_u32(glb, static_cast<uint32_t>(12 + 8 + text.size() + 8 + bin.size()));
+  append_u32(glb, static_cast<uint32_t>(text.size()));
+  glb += "JSON" + text;
+  append_u32(glb, static_cast<uint32_t>(bin.size()));
+  glb += std::string("BIN\0", 4) + bin;
+  write_file(path, glb, named);
+}
+
+}  // namespace
 
 std::string surface_export_format(const std::filesystem::path& path) {
   std::string ext = path.extension().string();
@@ -22,7 +136,8 @@ std::string surface_export_format(const std::filesystem::path& path) {
   return "";
 }
 
-void export_surface_mesh(const std::filesystem::path& path, const SurfaceMesh& mesh, const std::filesystem::path& format_of) {
+void export_surface_mesh(const std::filesystem::path& path, const SurfaceMesh& mesh, const std::filesystem::path& format_of,
+                         const std::string& normal_map_uri) {
   const std::filesystem::path named = format_of.empty() ? path : format_of;
   const std::string format = surface_export_format(named);
   if (format.empty()) {
@@ -51,6 +166,48 @@ void export_surface_mesh(const std::filesystem::path& path, const SurfaceMesh& m
     m.mVertices[v] = aiVector3D(mesh.vertices[3 * v], mesh.vertices[3 * v + 1], mesh.vertices[3 * v + 2]);
     m.mNormals[v] = aiVector3D(mesh.normals[3 * v], mesh.normals[3 * v + 1], mesh.normals[3 * v + 2]);
   }
+  if (!mesh.uvs.empty()) {
+    // Assimp keeps OpenGL's texture origin (v up, from the bottom row); ctsurg's uvs follow glTF
+    // (v down, from the top row), and Assimp's glTF exporter flips v back, so both agree.
+    m.mNumUVComponents[0] = 2;
+    m.mTextureCoords[0] = new aiVector3D[nv];
+    for (unsigned v = 0; v < nv; ++v) m.mTextureCoords[0][v] = aiVector3D(mesh.uvs[2 * v], 1.0f - mesh.uvs[2 * v + 1], 0.0f);
+  }
+  if (!mesh.tangents.empty()) {
+    m.mTangents = new aiVector3D[nv];
+    m.mBitangents = new aiVector3D[nv];
+    for (unsigned v = 0; v < nv; ++v) {
+      const aiVector3D t(mesh.tangents[4 * v], mesh.tangents[4 * v + 1], mesh.tangents[4 * v + 2]);
+      m.mTangents[v] = t;
+      m.mBitangents[v] = (m.mNormals[v] ^ t) * mesh.tangents[4 * v + 3];  // w * normal x tangent
+    }
+  }
+  if (!mesh.normal_map.empty() && normal_map_uri.empty()) {
+    // The PNG travels inside the file (scene->mTextures, referenced as "*0"): Assimp's glTF 2
+    // exporter writes it as an image in the binary chunk (.glb) or a data URI (.gltf).
+    const std::vector<uint8_t> png = encode_normal_map_png(mesh.normal_map);
+    scene.mNumTextures = 1;
+    scene.mTextures = new aiTexture*[1]{new aiTexture()};
+    aiTexture& tex = *scene.mTextures[0];
+    tex.mWidth = static_cast<unsigned>(png.size());
+    tex.mHeight = 0;  // compressed: mWidth is the byte count
+    std::strncpy(tex.achFormatHint, "png", sizeof tex.achFormatHint - 1);
+    tex.mFilename = aiString("normal_map.png");
+    tex.pcData = new aiTexel[(png.size() + sizeof(aiTexel) - 1) / sizeof(aiTexel)];
+    std::memcpy(tex.pcData, png.data(), png.size());
+  }
+  if (!mesh.normal_map.empty()) {
+    // The material's normalTexture points at the map, so any glTF viewer shows the baked detail.
+    aiMaterial& mat = *scene.mMaterials[0];
+    const aiString name("tissue"), texture_path(normal_map_uri.empty() ? std::string("*0") : normal_map_uri);
+    mat.AddProperty(&name, AI_MATKEY_NAME);
+    mat.AddProperty(&texture_path, AI_MATKEY_TEXTURE(aiTextureType_NORMALS, 0));
+    const aiColor4D tissue(0.80f, 0.42f, 0.38f, 1.0f);
+    mat.AddProperty(&tissue, 1, AI_MATKEY_COLOR_DIFFUSE);
+    const float metallic = 0.0f, roughness = 0.55f;
+    mat.AddProperty(&metallic, 1, AI_MATKEY_METALLIC_FACTOR);
+    mat.AddProperty(&roughness, 1, AI_MATKEY_ROUGHNESS_FACTOR);
+  }
   m.mNumFaces = nf;
   m.mFaces = new aiFace[nf];
   for (unsigned f = 0; f < nf; ++f) {
@@ -60,6 +217,9 @@ void export_surface_mesh(const std::filesystem::path& path, const SurfaceMesh& m
   Assimp::Exporter exporter;
   if (exporter.Export(&scene, format, path.string()) != aiReturn_SUCCESS) {
     throw RuntimeError(named.string() + ": export failed: " + exporter.GetErrorString());
+  }
+  if (!mesh.tangents.empty() && !mesh.uvs.empty() && (format == "glb2" || format == "gltf2")) {
+    add_gltf_tangents(path, format == "glb2", mesh, named.string());
   }
 }
 

@@ -3,12 +3,13 @@
 field and isovalue, measured the same way.
 
   flying_edges_peer.py FIELD.h5 DATASET ISO SURFACE.h5      -> JSON: counts, area, volume of both
-  flying_edges_peer.py FIELD.h5 DATASET ISO --time THREADS  -> JSON: best-of-N wall time of VTK alone
+  flying_edges_peer.py FIELD.h5 DATASET ISO --time THREADS  -> JSON: median wall time of 15 runs of VTK alone
 
 FIELD.h5 is a ctsurg volume file (DATASET e.g. /hu or /grid/fraction, stored as DATASET/data with
 geometry attributes); SURFACE.h5 is what ctsurg-surface wrote for that field and iso. Like
 ctsurg-surface, a field that is inside (>= iso) on the lattice border is padded with a one-node
-frame of min(field min, iso - 1) so that both surfaces are closed. VTK works in index space scaled by
+frame of min(field min, iso - 1) so that both surfaces are closed (not in --time mode, which times
+the field as it is, as bench/bench_marching_cubes.cpp gives it to ctsurg). VTK works in index space scaled by
 the spacing; its points are mapped to LPS mm with the lattice's origin and direction before measuring.
 Needs Debian's python3-vtk9, python3-h5py and python3-numpy (run with /usr/bin/python3).
 """
@@ -69,20 +70,20 @@ def measures(points, triangles):
 def main(argv):
     field_path, dataset, iso = argv[1], argv[2], float(argv[3])
     data, spacing, origin, direction = read_field(field_path, dataset)
-    data, origin = pad_if_open(data, iso, spacing, origin, direction)
-    if argv[4] == "--time":
+    if argv[4] == "--time":  # the field as it is, as bench_marching_cubes gives it to ctsurg
         vtk.vtkSMPTools.Initialize(int(argv[5]))
         fe = flying_edges(data, iso, spacing)
-        best = float("inf")
+        times = []
         for _ in range(15):
             fe.Modified()
             t = time.perf_counter()
             fe.Update()
-            best = min(best, time.perf_counter() - t)
+            times.append(time.perf_counter() - t)
         out = fe.GetOutput()
-        print(json.dumps({"backend": vtk.vtkSMPTools.GetBackend(), "threads": int(argv[5]), "seconds": best,
+        print(json.dumps({"backend": vtk.vtkSMPTools.GetBackend(), "threads": int(argv[5]), "seconds": float(np.median(times)),
                           "nodes": int(data.size), "triangles": out.GetNumberOfCells()}))
         return 0
+    data, origin = pad_if_open(data, iso, spacing, origin, direction)
     fe = flying_edges(data, iso, spacing)
     fe.Update()
     out = fe.GetOutput()

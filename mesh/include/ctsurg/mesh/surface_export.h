@@ -5,6 +5,11 @@
 // Coordinates are written as they are: LPS millimetres (glTF's "metres, +Y up" convention is not
 // applied; a viewer shows the patient in mm with superior along +Z). Normals go with the vertices
 // where the format has them (not STL, which stores face normals only).
+// A mesh with uvs (and tangents) from ctsurg-normalmap exports them as texture coordinates (and,
+// for glTF, the TANGENT attribute, added after Assimp, whose 5.2 exporter drops it). With a normal
+// map the material (a PBR tissue colour) uses it as its normal texture: embedded (.glb: in the
+// binary chunk; .gltf: a data URI), or, when `normal_map_uri` is given, referenced by that relative
+// URI (the caller writes the PNG there).
 #pragma once
 
 #include "ctsurg/core/surface_mesh_file.h"
@@ -22,6 +27,6 @@ std::string surface_export_format(const std::filesystem::path& path);
 // defaulting to `path`). InputError(path, "suffix", ...) for an unknown suffix; RuntimeError when
 // Assimp fails. Not atomic by itself: callers write to an AtomicOutput's temp_path().
 void export_surface_mesh(const std::filesystem::path& path, const SurfaceMesh& mesh,
-                         const std::filesystem::path& format_of = {});
+                         const std::filesystem::path& format_of = {}, const std::string& normal_map_uri = {});
 
 }  // namespace ctsurg

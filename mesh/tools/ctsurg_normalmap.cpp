@@ -1,0 +1,221 @@
+// ctsurg-normalmap SURFACE.h5 FIELD.h5 OUTPUT.h5: a UV atlas, tangent frames and a tangent-space
+// normal map for a coarse surface, baked from the full-resolution tissue (an occupancy grid's /mask)
+// or CT (an HU volume's /hu at --iso), written as a ctsurg surface file, optionally a PNG and a
+// .glb/.gltf whose material uses the map.
+#include <spdlog/spdlog.h>
+
+#include <chrono>
+#include <cmath>
+#include <fstream>
+#include <memory>
+#include <optional>
+
+#include "ctsurg/core/atomic_output.h"
+#include "ctsurg/core/error.h"
+#include "ctsurg/core/hdf5_file.h"
+#include "ctsurg/core/hu_volume_file.h"
+#include "ctsurg/core/occupancy_grid_file.h"
+#include "ctsurg/core/provenance.h"
+#include "ctsurg/core/surface_mesh_file.h"
+#include "ctsurg/core/tool_app.h"
+#include "ctsurg/core/version.h"
+#include "ctsurg/mesh/detail_field.h"
+#include "ctsurg/mesh/normal_map_baking.h"
+#include "ctsurg/mesh/normal_map_png.h"
+#include "ctsurg/mesh/surface_export.h"
+#include "ctsurg/mesh/tangent_frames.h"
+#include "ctsurg/mesh/uv_atlas.h"
+
+namespace fs = std::filesystem;
+
+namespace {
+
+std::string suffix(const fs::path& p) {
+  std::string ext = p.extension().string();
+  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return ext;
+}
+
+// The detail field: the tissue labels of an occupancy grid (/mask) or an HU volume at `iso`.
+ctsurg::DetailField read_detail_field(const fs::path& input, std::optional<double> iso, double sigma_mm, int threads,
+                                      std::string& described) {
+  std::string format;
+  {
+    const ctsurg::h5::File f = ctsurg::h5::File::open(input);
+    const auto root = f.root();
+    if (root.has_attribute("ctsurg_format")) format = root.string_attribute("ctsurg_format");
+  }
+  if (format == "occupancy_grid") {
+    if (iso)
+      throw ctsurg::InputError("--iso", "", input.string() + " is an occupancy grid: its /mask is baked at 0.5; drop --iso");
+    const ctsurg::OccupancyGrid grid = ctsurg::read_occupancy_grid_file(input);
+    const double sigma = sigma_mm >= 0.0 ? sigma_mm : grid.mask.geometry.spacing.maxCoeff();
+    described = fmt::format("/mask (tissue != 0), Gaussian sigma {:.3g} mm, iso 0.5", sigma);
+    return ctsurg::detail_field_from_labels(grid.mask, sigma, threads);
+  }
+  if (format == "hu_volume") {
+    if (!iso) throw ctsurg::InputError("--iso", "", input.string() + " is an HU volume: give the isovalue in HU, e.g. --iso 150");
+    const ctsurg::HuVolume hu = ctsurg::read_hu_volume_file(input);
+    const double sigma = sigma_mm >= 0.0 ? sigma_mm : hu.hu.geometry.spacing.maxCoeff();
+    described = fmt::format("/hu, Gaussian sigma {:.3g} mm, iso {} HU", sigma, *iso);
+    return ctsurg::detail_field_from_values(hu.hu, *iso, sigma, threads);
+  }
+  throw ctsurg::InputError(input.string(), "/@ctsurg_format",
+                           "expected an occupancy grid (ctsurg-grid) or an HU volume (ctsurg-import), found '" +
+                               (format.empty() ? std::string("none") : format) + "'");
+}
+
+void write_bytes(const fs::path& path, const std::vector<uint8_t>& bytes, const std::string& name) {
+  std::ofstream f(path, std::ios::binary);
+  f.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+  if (!f.flush()) throw ctsurg::RuntimeError(name + ": write failed");
+}
+
+// A mesh export written to temporary names; commit() moves it into place. .glb embeds the normal
+// map. .gltf writes NAME.bin beside NAME.gltf and names it inside the JSON, so it is exported into
+// a private folder under its final name and both files are moved to the temporary names; its
+// material references the normal map as NAME_normal_map.png, written beside it.
+class PendingExport {
+ public:
+  PendingExport(const fs::path& output, const ctsurg::SurfaceMesh& mesh, const std::vector<uint8_t>& png) : out_(output) {
+    if (ctsurg::surface_export_format(output) != "gltf2") {
+      ctsurg::export_surface_mesh(out_.temp_path(), mesh, output);
+      return;
+    }
+    fs::path bin_path = output, png_path = output;
+    bin_path.replace_extension(".bin");
+    png_path.replace_filename(output.stem().string() + "_normal_map.png");
+    bin_ = std::make_unique<ctsurg::AtomicOutput>(bin_path);
+    png_ = std::make_unique<ctsurg::AtomicOutput>(png_path);
+    write_bytes(png_->temp_path(), png, png_path.string());
+    fs::path dir = out_.temp_path();
+    dir += ".d";
+    fs::create_directory(dir);
+    struct Remove {
+      fs::path p;
+      ~Remove() {
+        std::error_code ec;
+        fs::remove_all(p, ec);
+      }
+    } remove{dir};
+    ctsurg::export_surface_mesh(dir / output.filename(), mesh, {}, png_path.filename().string());
+    fs::rename(dir / output.filename(), out_.temp_path());
+    fs::rename(dir / bin_path.filename(), bin_->temp_path());
+  }
+  void commit() {
+    out_.commit();
+    if (bin_) bin_->commit();
+    if (png_) png_->commit();
+  }
+
+ private:
+  ctsurg::AtomicOutput out_;
+  std::unique_ptr<ctsurg::AtomicOutput> bin_, png_;
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::string surface_path, field_path, output, png_path, mesh_path;
+  double iso = 0.0, sigma_mm = -1.0, search_mm = 0.0, max_angle_deg = 60.0;
+  int size = 2048, bits = 8, padding = 4, dilate = 2, threads = 0;
+  CLI::Option* iso_opt = nullptr;
+  return ctsurg::run_tool(
+      argc, argv, "ctsurg-normalmap",
+      "Bake the full-resolution detail onto a coarse surface (from ctsurg-surface): a UV atlas (planar charts, "
+      "uniform texel density, packed with padding), glTF tangents and a tangent-space normal map from the gradient "
+      "of the smoothed full-resolution field where it crosses the surface nearest along the normal. FIELD is an "
+      "occupancy grid (its /mask) or an HU volume (--iso HU). Writes OUTPUT.h5 (surface + uvs, tangents, "
+      "source_vertex, normal map), optionally --png and --mesh (.glb/.gltf with the map as normalTexture).",
+      [&](CLI::App& app) {
+        app.add_option("surface", surface_path, "Surface file from ctsurg-surface (.h5)")->required();
+        app.add_option("field", field_path, "Occupancy grid (ctsurg-grid) or HU volume (ctsurg-import) file (.h5)")->required();
+        app.add_option("output", output, "Surface file to write (.h5)")->required();
+        app.add_option("--png", png_path, "Also write the normal map as a PNG");
+        app.add_option("--mesh,--glb", mesh_path, "Also write the textured mesh: .glb or .gltf (normal map embedded)");
+        app.add_option("--size", size, "Atlas and map size in texels (width = height)")
+            ->capture_default_str()
+            ->check(CLI::Range(16, 16384));
+        app.add_option("--bits", bits, "Bits per channel: 8 or 16")->capture_default_str()->check(CLI::IsMember({8, 16}));
+        app.add_option("--padding", padding, "Empty texels between charts")->capture_default_str()->check(CLI::Range(1, 256));
+        app.add_option("--dilate", dilate, "Texels the charts are dilated into the padding")
+            ->capture_default_str()
+            ->check(CLI::Range(0, 64));
+        app.add_option("--sigma-mm", sigma_mm,
+                       "Gaussian smoothing of the full-resolution field, mm (default: its largest voxel spacing)")
+            ->check(CLI::NonNegativeNumber);
+        iso_opt = app.add_option("--iso", iso, "Isovalue in HU (HU volumes only)");
+        app.add_option("--search-mm", search_mm, "Search range along the normal, mm (default: one grid cell)")
+            ->check(CLI::NonNegativeNumber);
+        app.add_option("--max-angle-deg", max_angle_deg, "Largest angle between a chart's axis and its triangles' normals")
+            ->capture_default_str()
+            ->check(CLI::Range(1.0, 85.0));
+        app.add_option("--threads", threads, "OpenMP threads (0: all)")->check(CLI::NonNegativeNumber);
+      },
+      [&](const ctsurg::ToolContext& ctx) {
+        const auto start = std::chrono::steady_clock::now();
+        const fs::path out_path = output;
+        if (suffix(out_path) != ".h5" && suffix(out_path) != ".hdf5") {
+          throw ctsurg::InputError(output, "suffix", "the output is a ctsurg surface file: use .h5");
+        }
+        if (!png_path.empty() && suffix(png_path) != ".png")
+          throw ctsurg::InputError(png_path, "suffix", "--png needs a .png name");
+        if (!mesh_path.empty() && suffix(mesh_path) != ".glb" && suffix(mesh_path) != ".gltf") {
+          throw ctsurg::InputError(mesh_path, "suffix", "--mesh needs a .glb or .gltf name");
+        }
+        if (padding > size / 8) throw ctsurg::InputError("--padding", "", "must be at most --size / 8");
+        if (*iso_opt && !std::isfinite(iso)) throw ctsurg::InputError("--iso", "", "must be a finite number");
+        ctsurg::check_output_path(out_path);
+        if (!png_path.empty()) ctsurg::check_output_path(png_path);
+        if (!mesh_path.empty()) ctsurg::check_output_path(mesh_path);
+
+        const ctsurg::SurfaceMesh coarse = ctsurg::read_surface_mesh_file(surface_path);
+        if (!coarse.uvs.empty()) {
+          throw ctsurg::InputError(surface_path, "/surface/uvs",
+                                   "already has a texture atlas; give the surface from ctsurg-surface");
+        }
+        std::string described;
+        const ctsurg::DetailField field =
+            read_detail_field(field_path, *iso_opt ? std::optional<double>(iso) : std::nullopt, sigma_mm, threads, described);
+        spdlog::info("{}: {} vertices, {} triangles; detail from {}: {}", surface_path, coarse.vertex_count(),
+                     coarse.triangle_count(), field_path, described);
+
+        const auto seconds_since = [](std::chrono::steady_clock::time_point t) {
+          return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+        };
+        const auto atlas_start = std::chrono::steady_clock::now();
+        const ctsurg::UvAtlas atlas = ctsurg::build_uv_atlas(coarse.vertices, coarse.triangles, {size, padding, max_angle_deg});
+        ctsurg::SurfaceMesh mesh = ctsurg::apply_uv_atlas(coarse, atlas);
+        mesh.tangents = ctsurg::tangent_frames(mesh.vertices, mesh.normals, mesh.triangles, mesh.uvs);
+        spdlog::info("atlas: {} charts, {} x {} texels, {:.3f} mm per texel, fill {:.1f} %, {} vertices after seams ({:.2f} s)",
+                     atlas.chart_count, size, size, 1.0 / atlas.texels_per_mm, 100.0 * atlas.fill_ratio, mesh.vertex_count(),
+                     seconds_since(atlas_start));
+        ctsurg::NormalMapBakeStats stats;
+        const auto bake_start = std::chrono::steady_clock::now();
+        mesh.normal_map = ctsurg::bake_normal_map(mesh, field, {size, bits, dilate, search_mm, threads}, &stats);
+        spdlog::info(
+            "normal map: {} texels baked ({:.1f} % on a detailed-surface crossing within {:.2f} mm), {} dilated, "
+            "mean tilt from the coarse normal {:.2f} deg ({:.2f} s)",
+            stats.texels_covered, stats.texels_covered ? 100.0 * stats.texels_on_crossing / stats.texels_covered : 0.0,
+            stats.search_mm, stats.texels_dilated, stats.mean_tilt_deg, seconds_since(bake_start));
+
+        // Every output goes to a temporary name first; the .h5 is committed last but one step before
+        // the others, so a failure before then leaves none of them.
+        const std::vector<uint8_t> png = ctsurg::encode_normal_map_png(mesh.normal_map);
+        std::optional<ctsurg::AtomicOutput> png_out;
+        if (!png_path.empty()) {
+          png_out.emplace(png_path);
+          write_bytes(png_out->temp_path(), png, png_path);
+        }
+        std::optional<PendingExport> mesh_out;
+        if (!mesh_path.empty()) mesh_out.emplace(mesh_path, mesh, png);
+        ctsurg::Provenance provenance{ctx.name, ctsurg::kVersion, ctx.command_line, {}, nlohmann::json::array()};
+        provenance.add_input(surface_path);
+        provenance.add_input(field_path);
+        ctsurg::write_surface_mesh_file(out_path, mesh, provenance);
+        if (png_out) png_out->commit();
+        if (mesh_out) mesh_out->commit();
+        spdlog::info("wrote {} in {:.2f} s", output,
+                     std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+      });
+}

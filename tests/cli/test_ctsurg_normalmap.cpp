@@ -1,0 +1,215 @@
+// ctsurg-normalmap as a user runs it: a ridged ball as an occupancy grid (2 mm cells, tissue mask at
+// 1 mm), its surface from ctsurg-surface, then the normal map tool's .h5 / .png / .glb / .gltf
+// outputs, determinism and bad-input handling (exit 2, a message naming the problem, no file left).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "ctsurg/core/hu_volume_file.h"
+#include "ctsurg/core/occupancy_grid_file.h"
+#include "ctsurg/core/provenance.h"
+#include "ctsurg/core/surface_mesh_file.h"
+#include "ctsurg/mesh/normal_map_png.h"
+#include "test_support.h"
+
+namespace fs = std::filesystem;
+using ctsurg::test::run_tool;
+using ctsurg::test::TempDir;
+
+namespace {
+
+ctsurg::Provenance test_provenance() { return {"test", "0", {}, {}, nlohmann::json::array()}; }
+
+// Inside the ball of radius 12 mm with 8 ridges around z of 0.8 mm.
+bool inside(const Eigen::Vector3d& p) { return p.norm() <= 12.0 + 0.8 * std::cos(8.0 * std::atan2(p.y(), p.x())); }
+
+// The occupancy grid: fractions on 2 mm cells by 4^3 supersampling, the mask at 1 mm.
+fs::path write_grid(const TempDir& dir) {
+  ctsurg::ImageGeometry g;
+  g.dims = {17, 17, 17};
+  g.spacing = Eigen::Vector3d::Constant(2.0);
+  g.origin = Eigen::Vector3d(-16.0, -16.0, -16.0);
+  ctsurg::OccupancyGrid grid;
+  grid.fraction = ctsurg::Volume<float>(g, 0.0f);
+  grid.occupancy = ctsurg::Volume<uint8_t>(g, 0);
+  grid.label = ctsurg::Volume<uint16_t>(g, 0);
+  constexpr int s = 4;
+  for (int64_t k = 0; k < 17; ++k)
+    for (int64_t j = 0; j < 17; ++j)
+      for (int64_t i = 0; i < 17; ++i) {
+        int in = 0;
+        for (int c = 0; c < s * s * s; ++c) {
+          const Eigen::Vector3d sub((c % s + 0.5) / s - 0.5, ((c / s) % s + 0.5) / s - 0.5, (c / (s * s) + 0.5) / s - 0.5);
+          in += inside(g.index_to_world(Eigen::Vector3d(double(i), double(j), double(k)) + sub));
+        }
+        grid.fraction(i, j, k) = float(in) / (s * s * s);
+        grid.occupancy(i, j, k) = grid.label(i, j, k) = grid.fraction(i, j, k) >= 0.5f;
+      }
+  ctsurg::ImageGeometry m;
+  m.dims = {33, 33, 33};
+  m.spacing = Eigen::Vector3d::Constant(1.0);
+  m.origin = Eigen::Vector3d(-16.0, -16.0, -16.0);
+  grid.mask = ctsurg::Volume<uint16_t>(m, 0);
+  for (int64_t k = 0; k < 33; ++k)
+    for (int64_t j = 0; j < 33; ++j)
+      for (int64_t i = 0; i < 33; ++i)
+        grid.mask(i, j, k) = inside(m.index_to_world(Eigen::Vector3d(double(i), double(j), double(k))));
+  grid.label_names = {{1, "ball"}};
+  const fs::path p = dir / "grid.h5";
+  ctsurg::write_occupancy_grid_file(p, grid, test_provenance());
+  return p;
+}
+
+std::string read_bytes(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+// The JSON chunk of a .glb (binary glTF 2: 12-byte header, then a chunk of length, type "JSON", data).
+nlohmann::json glb_json(const std::string& glb) {
+  uint32_t length = 0;
+  std::memcpy(&length, glb.data() + 12, 4);
+  EXPECT_EQ(glb.substr(16, 4), "JSON");
+  return nlohmann::json::parse(glb.substr(20, length));
+}
+
+// The material's normalTexture leads to a PNG image, and the mesh has UVs. Returns the image.
+nlohmann::json expect_normal_textured(const nlohmann::json& j) {
+  EXPECT_TRUE(j["meshes"][0]["primitives"][0]["attributes"].contains("TEXCOORD_0"));
+  EXPECT_TRUE(j["meshes"][0]["primitives"][0]["attributes"].contains("TANGENT"));
+  if (!j.contains("materials") || !j["materials"][0].contains("normalTexture")) {
+    ADD_FAILURE() << "no normalTexture: " << j.dump();
+    return {};
+  }
+  const auto& tex = j["textures"][j["materials"][0]["normalTexture"]["index"].get<std::size_t>()];
+  return j["images"][tex["source"].get<std::size_t>()];
+}
+
+struct Outputs {
+  fs::path grid, surface;
+};
+
+Outputs prepare(const TempDir& dir) {
+  Outputs o{write_grid(dir), dir / "surface.h5"};
+  const auto r = run_tool("ctsurg-surface", {o.grid.string(), o.surface.string()});
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  return o;
+}
+
+TEST(CtsurgNormalmap, WritesSurfacePngAndGlbWithTheNormalTexture) {
+  TempDir dir;
+  const Outputs in = prepare(dir);
+  const auto r = run_tool("ctsurg-normalmap", {in.surface.string(), in.grid.string(), (dir / "nm.h5").string(), "--size", "256",
+                                               "--png", (dir / "nm.png").string(), "--mesh", (dir / "nm.glb").string()});
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("charts"), std::string::npos) << r.output;
+  const auto coarse = ctsurg::read_surface_mesh_file(in.surface);
+  const auto m = ctsurg::read_surface_mesh_file(dir / "nm.h5");
+  EXPECT_EQ(m.triangle_count(), coarse.triangle_count());
+  EXPECT_GE(m.vertex_count(), coarse.vertex_count());
+  EXPECT_EQ(m.uvs.size(), 2 * m.vertices.size() / 3);
+  EXPECT_EQ(m.tangents.size(), 4 * m.vertices.size() / 3);
+  EXPECT_EQ(m.source_vertex_count, coarse.vertex_count());
+  ASSERT_EQ(m.normal_map.width, 256);
+  EXPECT_EQ(m.normal_map.bits, 8);
+  // The grid tie travels with the copies.
+  for (std::size_t v = 0; v < m.source_vertex.size(); ++v)
+    for (int c = 0; c < 8; ++c)
+      ASSERT_EQ(m.grid_weights[8 * v + std::size_t(c)], coarse.grid_weights[8 * m.source_vertex[v] + std::size_t(c)]);
+  // The PNG holds the same map as the .h5; the ridges tilt the normals, so the map is not flat.
+  const std::string png = read_bytes(dir / "nm.png");
+  const auto decoded = ctsurg::decode_normal_map_png(std::vector<uint8_t>(png.begin(), png.end()), "nm.png");
+  EXPECT_EQ(decoded.rgb, m.normal_map.rgb);
+  int64_t tilted = 0;  // normals more than about 9 deg off the coarse normal
+  for (std::size_t i = 0; i < decoded.rgb.size(); i += 3)
+    tilted += std::abs(decoded.rgb[i] - 128) > 20 || std::abs(decoded.rgb[i + 1] - 128) > 20;
+  EXPECT_GT(tilted, 1000);
+  const std::string glb = read_bytes(dir / "nm.glb");
+  ASSERT_EQ(glb.substr(0, 4), "glTF");
+  const auto img = expect_normal_textured(glb_json(glb));
+  EXPECT_EQ(img.value("mimeType", ""), "image/png");
+  EXPECT_TRUE(img.contains("bufferView")) << img.dump();
+  // The PNG is embedded byte for byte.
+  EXPECT_NE(glb.find(png.substr(0, 4096)), std::string::npos);
+  for (const auto& f : ctsurg::test::files_in(dir.path()))
+    EXPECT_EQ(f.filename().string().rfind(".tmp-", 0), std::string::npos) << f;
+}
+
+TEST(CtsurgNormalmap, GltfWritesBinBesideIt16Bit) {
+  TempDir dir;
+  const Outputs in = prepare(dir);
+  const auto r = run_tool("ctsurg-normalmap", {in.surface.string(), in.grid.string(), (dir / "nm.h5").string(), "--size", "128",
+                                               "--bits", "16", "--mesh", (dir / "nm.gltf").string()});
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  ASSERT_TRUE(fs::exists(dir / "nm.bin"));
+  const auto j = nlohmann::json::parse(read_bytes(dir / "nm.gltf"));
+  EXPECT_EQ(expect_normal_textured(j).value("uri", ""), "nm_normal_map.png");
+  EXPECT_EQ(j["buffers"][0]["uri"], "nm.bin");
+  const std::string png = read_bytes(dir / "nm_normal_map.png");
+  const auto map = ctsurg::decode_normal_map_png(std::vector<uint8_t>(png.begin(), png.end()), "nm_normal_map.png");
+  EXPECT_EQ(map.bits, 16);
+  EXPECT_EQ(map.width, 128);
+  EXPECT_EQ(ctsurg::read_surface_mesh_file(dir / "nm.h5").normal_map.bits, 16);
+  for (const auto& f : ctsurg::test::files_in(dir.path()))
+    EXPECT_EQ(f.filename().string().rfind(".tmp-", 0), std::string::npos) << f;
+}
+
+TEST(CtsurgNormalmap, RerunIsByteIdentical) {
+  TempDir dir;
+  const Outputs in = prepare(dir);
+  const std::vector<std::string> args = {
+      in.surface.string(),      in.grid.string(), (dir / "a.h5").string(),  "--size",    "128", "--png",
+      (dir / "a.png").string(), "--mesh",         (dir / "a.glb").string(), "--threads", "1"};
+  ASSERT_EQ(run_tool("ctsurg-normalmap", args).exit_code, 0);
+  const std::string h5 = read_bytes(dir / "a.h5"), png = read_bytes(dir / "a.png"), glb = read_bytes(dir / "a.glb");
+  ASSERT_EQ(run_tool("ctsurg-normalmap", args).exit_code, 0);
+  EXPECT_TRUE(read_bytes(dir / "a.h5") == h5);
+  EXPECT_TRUE(read_bytes(dir / "a.png") == png);
+  EXPECT_TRUE(read_bytes(dir / "a.glb") == glb);
+  // Another thread count: the same map (the .h5 differs only in the recorded command line).
+  ASSERT_EQ(run_tool("ctsurg-normalmap", {in.surface.string(), in.grid.string(), (dir / "b.h5").string(), "--size", "128",
+                                          "--png", (dir / "b.png").string(), "--threads", "2"})
+                .exit_code,
+            0);
+  EXPECT_TRUE(read_bytes(dir / "b.png") == png);
+}
+
+TEST(CtsurgNormalmap, BadInputExitsTwoAndLeavesNoFile) {
+  TempDir dir;
+  const Outputs in = prepare(dir);
+  ctsurg::HuVolume v;
+  ctsurg::ImageGeometry g;
+  g.dims = {8, 8, 8};
+  v.hu = ctsurg::Volume<float>(g, -1000.0f);
+  ctsurg::write_hu_volume_file(dir / "ct.h5", v, test_provenance());
+  ASSERT_EQ(
+      run_tool("ctsurg-normalmap", {in.surface.string(), in.grid.string(), (dir / "done.h5").string(), "--size", "64"}).exit_code,
+      0);
+  const auto expect_bad = [&](const std::vector<std::string>& args, const std::string& says) {
+    const auto before = ctsurg::test::files_in(dir.path());
+    const auto r = run_tool("ctsurg-normalmap", args);
+    EXPECT_EQ(r.exit_code, 2) << r.output;
+    EXPECT_NE(r.output.find(says), std::string::npos) << r.output;
+    EXPECT_EQ(ctsurg::test::files_in(dir.path()), before) << r.output;
+  };
+  const std::string s = in.surface.string(), grid = in.grid.string(), out = (dir / "o.h5").string();
+  const std::string png = (dir / "o.png").string(), glb = (dir / "o.glb").string();
+  expect_bad({s, (dir / "ct.h5").string(), out, "--png", png, "--mesh", glb}, "--iso");
+  expect_bad({s, grid, out, "--bits", "12", "--png", png}, "--bits");
+  expect_bad({s, grid, out, "--png", (dir / "o.jpg").string()}, "--png");
+  expect_bad({s, grid, (dir / "o.vtk").string()}, "suffix");
+  expect_bad({s, grid, out, "--mesh", (dir / "o.stl").string()}, "--mesh");
+  expect_bad({(dir / "missing.h5").string(), grid, out, "--png", png}, "missing.h5");
+  expect_bad({grid, grid, out, "--png", png}, "surface_mesh");
+  expect_bad({(dir / "done.h5").string(), grid, out, "--png", png}, "already has a texture atlas");
+  expect_bad({s, grid, (dir / "no_such_folder" / "o.h5").string()}, "no_such_folder");
+  expect_bad({s, grid, out, "--size", "64", "--padding", "9"}, "--padding");
+}
+
+}  // namespace
