@@ -223,4 +223,50 @@ void export_surface_mesh(const std::filesystem::path& path, const SurfaceMesh& m
   }
 }
 
+void write_file_bytes(const std::filesystem::path& path, const std::vector<uint8_t>& bytes, const std::string& name) {
+  std::ofstream f(path, std::ios::binary);
+  f.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+  if (!f.flush()) throw RuntimeError(name + ": write failed");
+}
+
+PendingSurfaceExport::PendingSurfaceExport(const std::filesystem::path& output, const SurfaceMesh& mesh,
+                                           const std::vector<uint8_t>& normal_map_png)
+    : out_(output) {
+  namespace fs = std::filesystem;
+  if (surface_export_format(output) != "gltf2") {
+    export_surface_mesh(out_.temp_path(), mesh, output);
+    return;
+  }
+  fs::path bin_path = output;
+  bin_path.replace_extension(".bin");
+  bin_ = std::make_unique<AtomicOutput>(bin_path);
+  std::string png_uri;
+  if (!normal_map_png.empty()) {
+    fs::path png_path = output;
+    png_path.replace_filename(output.stem().string() + "_normal_map.png");
+    png_ = std::make_unique<AtomicOutput>(png_path);
+    write_file_bytes(png_->temp_path(), normal_map_png, png_path.string());
+    png_uri = png_path.filename().string();
+  }
+  fs::path dir = out_.temp_path();
+  dir += ".d";
+  fs::create_directory(dir);
+  struct Remove {
+    fs::path p;
+    ~Remove() {
+      std::error_code ec;
+      fs::remove_all(p, ec);
+    }
+  } remove{dir};
+  export_surface_mesh(dir / output.filename(), mesh, {}, png_uri);
+  fs::rename(dir / output.filename(), out_.temp_path());
+  fs::rename(dir / bin_path.filename(), bin_->temp_path());
+}
+
+void PendingSurfaceExport::commit() {
+  out_.commit();
+  if (bin_) bin_->commit();
+  if (png_) png_->commit();
+}
+
 }  // namespace ctsurg

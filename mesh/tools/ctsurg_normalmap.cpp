@@ -6,8 +6,6 @@
 
 #include <chrono>
 #include <cmath>
-#include <fstream>
-#include <memory>
 #include <optional>
 
 #include "ctsurg/core/atomic_output.h"
@@ -64,54 +62,6 @@ ctsurg::DetailField read_detail_field(const fs::path& input, std::optional<doubl
                            "expected an occupancy grid (ctsurg-grid) or an HU volume (ctsurg-import), found '" +
                                (format.empty() ? std::string("none") : format) + "'");
 }
-
-void write_bytes(const fs::path& path, const std::vector<uint8_t>& bytes, const std::string& name) {
-  std::ofstream f(path, std::ios::binary);
-  f.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
-  if (!f.flush()) throw ctsurg::RuntimeError(name + ": write failed");
-}
-
-// A mesh export written to temporary names; commit() moves it into place. .glb embeds the normal
-// map. .gltf writes NAME.bin beside NAME.gltf and names it inside the JSON, so it is exported into
-// a private folder under its final name and both files are moved to the temporary names; its
-// material references the normal map as NAME_normal_map.png, written beside it.
-class PendingExport {
- public:
-  PendingExport(const fs::path& output, const ctsurg::SurfaceMesh& mesh, const std::vector<uint8_t>& png) : out_(output) {
-    if (ctsurg::surface_export_format(output) != "gltf2") {
-      ctsurg::export_surface_mesh(out_.temp_path(), mesh, output);
-      return;
-    }
-    fs::path bin_path = output, png_path = output;
-    bin_path.replace_extension(".bin");
-    png_path.replace_filename(output.stem().string() + "_normal_map.png");
-    bin_ = std::make_unique<ctsurg::AtomicOutput>(bin_path);
-    png_ = std::make_unique<ctsurg::AtomicOutput>(png_path);
-    write_bytes(png_->temp_path(), png, png_path.string());
-    fs::path dir = out_.temp_path();
-    dir += ".d";
-    fs::create_directory(dir);
-    struct Remove {
-      fs::path p;
-      ~Remove() {
-        std::error_code ec;
-        fs::remove_all(p, ec);
-      }
-    } remove{dir};
-    ctsurg::export_surface_mesh(dir / output.filename(), mesh, {}, png_path.filename().string());
-    fs::rename(dir / output.filename(), out_.temp_path());
-    fs::rename(dir / bin_path.filename(), bin_->temp_path());
-  }
-  void commit() {
-    out_.commit();
-    if (bin_) bin_->commit();
-    if (png_) png_->commit();
-  }
-
- private:
-  ctsurg::AtomicOutput out_;
-  std::unique_ptr<ctsurg::AtomicOutput> bin_, png_;
-};
 
 }  // namespace
 
@@ -205,9 +155,9 @@ int main(int argc, char** argv) {
         std::optional<ctsurg::AtomicOutput> png_out;
         if (!png_path.empty()) {
           png_out.emplace(png_path);
-          write_bytes(png_out->temp_path(), png, png_path);
+          ctsurg::write_file_bytes(png_out->temp_path(), png, png_path);
         }
-        std::optional<PendingExport> mesh_out;
+        std::optional<ctsurg::PendingSurfaceExport> mesh_out;
         if (!mesh_path.empty()) mesh_out.emplace(mesh_path, mesh, png);
         ctsurg::Provenance provenance{ctx.name, ctsurg::kVersion, ctx.command_line, {}, nlohmann::json::array()};
         provenance.add_input(surface_path);

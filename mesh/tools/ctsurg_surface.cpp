@@ -47,29 +47,6 @@ Field read_field(const fs::path& input) {
                                (format.empty() ? std::string("none") : format) + "'");
 }
 
-// .gltf writes NAME.bin beside NAME.gltf and names it inside the JSON, so it is exported into a
-// private folder under its final name and both files are moved into place atomically.
-void export_gltf(const fs::path& output, const ctsurg::SurfaceMesh& mesh) {
-  fs::path bin_path = output;
-  bin_path.replace_extension(".bin");
-  ctsurg::AtomicOutput out(output), bin(bin_path);
-  fs::path dir = out.temp_path();
-  dir += ".d";
-  fs::create_directory(dir);
-  struct Remove {
-    fs::path p;
-    ~Remove() {
-      std::error_code ec;
-      fs::remove_all(p, ec);
-    }
-  } remove{dir};
-  ctsurg::export_surface_mesh(dir / output.filename(), mesh);
-  fs::rename(dir / output.filename(), out.temp_path());
-  fs::rename(dir / bin_path.filename(), bin.temp_path());
-  out.commit();
-  bin.commit();
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -149,12 +126,8 @@ int main(int argc, char** argv) {
           ctsurg::Provenance provenance{ctx.name, ctsurg::kVersion, ctx.command_line, {}, nlohmann::json::array()};
           provenance.add_input(input);
           ctsurg::write_surface_mesh_file(out_path, mesh, provenance);
-        } else if (ctsurg::surface_export_format(out_path) == "gltf2") {
-          export_gltf(out_path, mesh);
         } else {
-          ctsurg::AtomicOutput out(out_path);
-          ctsurg::export_surface_mesh(out.temp_path(), mesh, out_path);
-          out.commit();
+          ctsurg::PendingSurfaceExport(out_path, mesh).commit();
         }
         spdlog::info("wrote {} in {:.2f} s", output,
                      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());

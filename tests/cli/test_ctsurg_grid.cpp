@@ -34,7 +34,7 @@ double radius_at(const ctsurg::ImageGeometry& g, int64_t i, int64_t j, int64_t k
   return (g.spacing.cwiseProduct(Eigen::Vector3d(double(i), double(j), double(k)) - c)).norm();
 }
 
-ctsurg::Provenance test_provenance() { return {"test", "0", {}, {}, nlohmann::json::array()}; }
+using ctsurg::test::test_provenance;
 
 fs::path write_ct(const TempDir& dir) {
   ctsurg::HuVolume v;
@@ -62,12 +62,7 @@ fs::path write_labels(const TempDir& dir, const ctsurg::ImageGeometry& g, const 
   return p;
 }
 
-std::string read_bytes(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+using ctsurg::test::read_bytes;
 
 double tissue_ml(const ctsurg::OccupancyGrid& grid) {
   double s = 0.0;

@@ -22,7 +22,7 @@ using ctsurg::test::TempDir;
 
 namespace {
 
-ctsurg::Provenance test_provenance() { return {"test", "0", {}, {}, nlohmann::json::array()}; }
+using ctsurg::test::test_provenance;
 
 // Inside the ball of radius 12 mm with 8 ridges around z of 0.8 mm.
 bool inside(const Eigen::Vector3d& p) { return p.norm() <= 12.0 + 0.8 * std::cos(8.0 * std::atan2(p.y(), p.x())); }
@@ -64,12 +64,7 @@ fs::path write_grid(const TempDir& dir) {
   return p;
 }
 
-std::string read_bytes(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+using ctsurg::test::read_bytes;
 
 // The JSON chunk of a .glb (binary glTF 2: 12-byte header, then a chunk of length, type "JSON", data).
 nlohmann::json glb_json(const std::string& glb) {

@@ -27,7 +27,7 @@ namespace {
 
 constexpr double kRadiusMm = 12.0, kCellMm = 2.0;
 
-ctsurg::Provenance test_provenance() { return {"test", "0", {}, {}, nlohmann::json::array()}; }
+using ctsurg::test::test_provenance;
 
 // A ball of radius 12 mm on 2 mm cells; fractions by 8^3 supersampling; `empty` gives all zeros.
 fs::path write_grid(const TempDir& dir, const std::string& name, bool empty = false) {
@@ -61,12 +61,7 @@ fs::path write_grid(const TempDir& dir, const std::string& name, bool empty = fa
   return p;
 }
 
-std::string read_bytes(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+using ctsurg::test::read_bytes;
 
 bool closed_and_oriented(const ctsurg::SurfaceMesh& m) { return ctsurg::test::manifold_problem(m).empty(); }
 using ctsurg::test::enclosed_volume;

@@ -21,7 +21,7 @@ namespace {
 
 constexpr double kRadiusMm = 8.0;
 
-ctsurg::Provenance test_provenance() { return {"test", "0", {}, {}, nlohmann::json::array()}; }
+using ctsurg::test::test_provenance;
 
 // A ball of radius 8 mm: the mask on 1 mm voxels, the grid on 2 mm cells; `empty` gives no tissue.
 fs::path write_grid(const TempDir& dir, const std::string& name, bool empty = false) {
@@ -56,12 +56,7 @@ fs::path write_grid(const TempDir& dir, const std::string& name, bool empty = fa
   return p;
 }
 
-std::string read_bytes(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+using ctsurg::test::read_bytes;
 
 const double kBall = 4.0 / 3.0 * std::numbers::pi * std::pow(kRadiusMm, 3);
 

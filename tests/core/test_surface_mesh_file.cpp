@@ -8,7 +8,7 @@
 
 namespace {
 
-ctsurg::Provenance test_provenance() { return {"test", "0", {}, {}, nlohmann::json::array()}; }
+using ctsurg::test::test_provenance;
 
 // One triangle split into a 4-vertex textured mesh (vertex 3 copies vertex 0).
 ctsurg::SurfaceMesh textured(int bits) {

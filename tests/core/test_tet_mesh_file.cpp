@@ -16,7 +16,7 @@ using ctsurg::test::TempDir;
 
 namespace {
 
-ctsurg::Provenance test_provenance() { return {"test", "0", {}, {}, nlohmann::json::array()}; }
+using ctsurg::test::test_provenance;
 
 // Two tets sharing face (1, 2, 3): label 1 below, label 2 above; six boundary faces.
 ctsurg::TetMesh two_tets() {

@@ -8,7 +8,9 @@
 #include <cctype>
 #include <atomic>
 #include <cstdio>
+#include <fstream>
 #include <random>
+#include <sstream>
 #include <unistd.h>
 
 namespace fs = std::filesystem;
@@ -70,5 +72,14 @@ std::vector<fs::path> files_in(const fs::path& folder) {
 }
 
 fs::path source_dir() { return CTSURG_SOURCE_DIR; }
+
+std::string read_bytes(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+Provenance test_provenance() { return {"test", "0", {}, {}, nlohmann::json::array()}; }
 
 }  // namespace ctsurg::test

@@ -1,6 +1,8 @@
 // Helpers shared by the test programs: temporary folders, running tools, the shared data folder.
 #pragma once
 
+#include "ctsurg/core/provenance.h"
+
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -41,5 +43,10 @@ std::filesystem::path shared_data_dir();
 std::vector<std::filesystem::path> files_in(const std::filesystem::path& folder);
 
 std::filesystem::path source_dir();
+
+// The whole content of a file ("" when it cannot be read), to compare outputs byte for byte.
+std::string read_bytes(const std::filesystem::path& path);
+// Provenance for files that tests write themselves.
+Provenance test_provenance();
 
 }  // namespace ctsurg::test

@@ -14,8 +14,13 @@
 
 #include "ctsurg/core/surface_mesh_file.h"
 
+#include "ctsurg/core/atomic_output.h"
+
+#include <cstdint>
 #include <filesystem>
+#include <memory>
 #include <string>
+#include <vector>
 
 namespace ctsurg {
 
@@ -28,5 +33,25 @@ std::string surface_export_format(const std::filesystem::path& path);
 // Assimp fails. Not atomic by itself: callers write to an AtomicOutput's temp_path().
 void export_surface_mesh(const std::filesystem::path& path, const SurfaceMesh& mesh,
                          const std::filesystem::path& format_of = {}, const std::string& normal_map_uri = {});
+
+// An export of `mesh` to `output` (by its suffix) and the files that go with it, all written to
+// temporary names in the output's folder at construction; commit() moves every one into place, and
+// an export never committed leaves nothing behind. .gltf writes NAME.bin beside NAME.gltf and names
+// it inside the JSON, so it is exported into a private folder under its final name and moved; with
+// a normal map (`normal_map_png`, the encoded PNG) its material references NAME_normal_map.png,
+// written beside it. Other formats embed the map (.glb) or have no material.
+class PendingSurfaceExport {
+ public:
+  PendingSurfaceExport(const std::filesystem::path& output, const SurfaceMesh& mesh,
+                       const std::vector<uint8_t>& normal_map_png = {});
+  void commit();
+
+ private:
+  AtomicOutput out_;
+  std::unique_ptr<AtomicOutput> bin_, png_;
+};
+
+// Writes `bytes` to `path` (a temporary path of an AtomicOutput); RuntimeError naming `name` on failure.
+void write_file_bytes(const std::filesystem::path& path, const std::vector<uint8_t>& bytes, const std::string& name);
 
 }  // namespace ctsurg
