@@ -98,10 +98,10 @@ DetailField detail_field_from_values(const Volume<float>& values, double iso, do
   return make_field(gaussian_smoothed(values, sigma_mm, threads), iso);
 }
 
-double sample_value(const DetailField& f, const Eigen::Vector3d& p) {
-  const Cell c = locate(f, p);
-  const auto& g = f.values.geometry;
-  double v = 0.0;
+// Calls fn(w, i, j, k) for the 8 corner nodes of the cell holding `c` with their trilinear weights
+// (nodes past the last one clamped to it; zero weights skipped).
+template <class Fn>
+void for_each_corner(const Cell& c, const ImageGeometry& g, Fn&& fn) {
   for (int corner = 0; corner < 8; ++corner) {
     double w = 1.0;
     int64_t idx[3];
@@ -110,24 +110,20 @@ double sample_value(const DetailField& f, const Eigen::Vector3d& p) {
       idx[a] = std::min(c.i[a] + bit, g.dims[static_cast<std::size_t>(a)] - 1);
       w *= bit ? c.t[a] : 1.0 - c.t[a];
     }
-    if (w != 0.0) v += w * f.values(idx[0], idx[1], idx[2]);
+    if (w != 0.0) fn(w, idx);
   }
+}
+
+double sample_value(const DetailField& f, const Eigen::Vector3d& p) {
+  double v = 0.0;
+  for_each_corner(locate(f, p), f.values.geometry, [&](double w, const int64_t* idx) { v += w * f.values(idx[0], idx[1], idx[2]); });
   return v;
 }
 
 Eigen::Vector3d sample_gradient(const DetailField& f, const Eigen::Vector3d& p) {
-  const Cell c = locate(f, p);
   const auto& g = f.values.geometry;
   Eigen::Vector3d grad_index = Eigen::Vector3d::Zero();
-  for (int corner = 0; corner < 8; ++corner) {
-    double w = 1.0;
-    int64_t idx[3];
-    for (int a = 0; a < 3; ++a) {
-      const int bit = (corner >> a) & 1;
-      idx[a] = std::min(c.i[a] + bit, g.dims[static_cast<std::size_t>(a)] - 1);
-      w *= bit ? c.t[a] : 1.0 - c.t[a];
-    }
-    if (w == 0.0) continue;
+  for_each_corner(locate(f, p), g, [&](double w, const int64_t* idx) {
     for (int a = 0; a < 3; ++a) {
       int64_t lo[3] = {idx[0], idx[1], idx[2]}, hi[3] = {idx[0], idx[1], idx[2]};
       lo[a] = std::max<int64_t>(idx[a] - 1, 0);
@@ -135,7 +131,7 @@ Eigen::Vector3d sample_gradient(const DetailField& f, const Eigen::Vector3d& p) 
       if (hi[a] == lo[a]) continue;
       grad_index[a] += w * (f.values(hi[0], hi[1], hi[2]) - f.values(lo[0], lo[1], lo[2])) / static_cast<double>(hi[a] - lo[a]);
     }
-  }
+  });
   // d f / d world = M^{-T} d f / d index, M the index-to-world matrix.
   return f.world_to_index_linear.transpose() * grad_index;
 }
