@@ -197,4 +197,36 @@ if [[ -e $WORK/heart_nifti.h5 && -e $heart_grid ]] && /usr/bin/python3 -c 'impor
   mc_row "heart grid 1.0 mm, fraction 0.5" BM_MarchingCubesHeartGrid1_0mm "$WORK/grid_heart_1mm.h5" /grid/fraction 0.5
   splice surface "$mc"
 fi
+# Spring-mass models: bench_spring_models (Google Benchmark, median of 5 repetitions) next to the
+# spring-mass papers' Table 1 (Mosegaard & Sorensen 2005, IEEE VR; the same CPU and GPU rows in Mosegaard,
+# Herborg & Sorensen 2005, MMVR).
+sim=$WORK/sim.md
+{
+  echo "## Simulation: spring-mass steps per second (\`bench/run.sh\`)"
+  echo
+  machine_line
+  echo "date: $(date -u +%Y-%m-%d); ctsurg $(git describe --always --dirty 2>/dev/null || echo unknown), Release build."
+  echo "Iterations (time steps) per second, median of 5 (\`build/bin/bench_spring_models\`): spring forces gathered per"
+  echo "particle, Verlet with damping and gravity, float, 2.4 mm cells, no normals. Implicit: the 18-neighbour grid"
+  echo "model; explicit: the same springs as a CSR spring list. Blocks are solid boxes; the heart is the bundled"
+  echo "heart's occupancy grid at 2.4 mm (the papers' pig heart had 42,745 particles). Papers: Pentium 4 3 GHz and"
+  echo "GeForce 6800 Ultra / CoolFX Ultra 2600 (Mosegaard & Sorensen 2005, Table 1; heart: 219 it/s, simulation alone,"
+  echo "Mosegaard, Herborg & Sorensen 2005). Load average when the runs started: $(cut -d' ' -f1-3 /proc/loadavg) (other"
+  echo "work on the machine slows the 2-thread runs most: each step waits for both threads)."
+  echo
+  echo "| particles | papers CPU | papers implicit GPU | papers explicit GPU | implicit, 1 thread | implicit, 2 threads | explicit, 1 thread | explicit, 2 threads |"
+  echo "|---|---:|---:|---:|---:|---:|---:|---:|"
+  "$BIN/bench_spring_models" --benchmark_repetitions=5 --benchmark_report_aggregates_only=true --benchmark_format=csv 2>/dev/null |
+    awk -F, '/_median"?,/{gsub(/"/,"",$1); n=split($1,p,"/"); model=p[1]; sub(/BM_/,"",model);
+      if (model ~ /Heart/) {size="heart"; t=p[2]} else {size=p[2]; t=p[3]}
+      kind=(model ~ /^Implicit/) ? "i" : "e"; v[size "," kind "," t]=$7; count[size]=$(NF-2)}
+      END {
+        paper["10000"]="45.8 | 839.8 | 457.1"; paper["20000"]="20.2 | 476.9 | 234.4"; paper["40000"]="9.9 | 264.6 | 121.0";
+        paper["50000"]="7.8 | 218.0 | 99.0"; paper["100000"]="3.3 | 104.1 | 48.5"; paper["heart"]="- | 219 (42,745) | -";
+        split("10000 20000 40000 50000 100000 heart", order, " ");
+        for (r = 1; r <= 6; ++r) { s = order[r]; if (!(s in count)) continue;
+          label = (s == "heart") ? sprintf("heart grid, %d", count[s]) : sprintf("block, %d", count[s]);
+          printf "| %s | %s | %.0f | %.0f | %.0f | %.0f |\n", label, paper[s], v[s ",i,1"], v[s ",i,2"], v[s ",e,1"], v[s ",e,2"] } }'
+} >"$sim"
+splice sim "$sim"
 echo "bench/run.sh: wrote $doc"

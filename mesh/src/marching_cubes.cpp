@@ -220,13 +220,27 @@ SurfaceMesh marching_cubes(const Volume<float>& field, double iso, const Marchin
   const auto rows = static_cast<std::size_t>(ny * nz);
   std::vector<uint32_t> row_vertices(rows);
   std::vector<int32_t> row_lo(rows), row_hi(rows);
+  // Per node row: 0 when every node is outside, 1 when every node is inside, 2 when mixed. Rows of
+  // empty space (or solid tissue) with uniform neighbours skip the byte loops of pass 1.
+  std::vector<uint8_t> row_side(rows);
 
+  // Pass 0. For a float f, f >= iso (in double) exactly when f >= iso_f, the least float >= iso,
+  // so the comparison runs on floats (twice the SIMD width of doubles).
+  float iso_f = static_cast<float>(iso);
+  if (double(iso_f) < iso) iso_f = std::nextafter(iso_f, std::numeric_limits<float>::infinity());
 #pragma omp parallel for schedule(static) num_threads(threads)
-  for (int64_t k = 0; k < nz; ++k) {
-    uint8_t* __restrict in = inside.get() + k * sxy;
-    const float* __restrict fk = f + k * sxy;
-    for (int64_t p = 0; p < sxy; ++p) in[p] = double(fk[p]) >= iso;
-  }
+  for (int64_t k = 0; k < nz; ++k)
+    for (int64_t j = 0; j < ny; ++j) {
+      uint8_t* __restrict in = inside.get() + nx * j + sxy * k;
+      const float* __restrict fr = f + nx * j + sxy * k;
+      uint8_t any = 0, all = 1;
+      for (int64_t i = 0; i < nx; ++i) {
+        in[i] = fr[i] >= iso_f;
+        any |= in[i];
+        all &= in[i];
+      }
+      row_side[static_cast<std::size_t>(j + ny * k)] = static_cast<uint8_t>(all ? 1 : any ? 2 : 0);
+    }
 
   // Pass 1 (parallel over slices): edge flags, per-row vertex counts, cell cases and the number of
   // vertices (edges leaving slice k) and triangles (cells between k and k + 1) of every slice. The
@@ -239,6 +253,22 @@ SurfaceMesh marching_cubes(const Volume<float>& field, double iso, const Marchin
       const int64_t r = nx * j + sxy * k;
       const uint8_t* __restrict a = inside.get() + r;
       uint8_t* __restrict e = edges.get() + r;
+      // A uniform row whose neighbours along +y and +z (where they exist) are uniform on the same
+      // side has no crossed edge and, with the neighbour along +y+z too, only cells of one case.
+      const auto side = [&](int64_t jj, int64_t kk) { return row_side[static_cast<std::size_t>(jj + ny * kk)]; };
+      const uint8_t s0 = side(j, k);
+      const bool same_y = j + 1 == ny || side(j + 1, k) == s0, same_z = k + 1 == nz || side(j, k + 1) == s0;
+      if (s0 != 2 && same_y && same_z) {
+        std::memset(e, 0, static_cast<std::size_t>(nx));
+        row_vertices[static_cast<std::size_t>(j + ny * k)] = 0;
+        row_lo[static_cast<std::size_t>(j + ny * k)] = static_cast<int32_t>(nx);
+        row_hi[static_cast<std::size_t>(j + ny * k)] = -1;
+        if (k + 1 == nz || j + 1 == ny) continue;
+        if (side(j + 1, k + 1) == s0) {
+          std::memset(cases.get() + r, s0 ? 0xff : 0, static_cast<std::size_t>(nx));
+          continue;
+        }
+      }
       for (int64_t i = 0; i + 1 < nx; ++i) e[i] = static_cast<uint8_t>(a[i] ^ a[i + 1]);
       e[nx - 1] = 0;
       if (j + 1 < ny)

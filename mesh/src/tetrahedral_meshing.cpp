@@ -4,6 +4,9 @@
 #include "ctsurg/core/error.h"
 #include "ctsurg/mesh/tet_mesh_quality.h"
 
+// GCC 12 reports false -Wmaybe-uninitialized in boost::optional inside CGAL's Mesh_3 (the
+// sanitizer build's inlining exposes them).
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Image_3.h>
 #include <CGAL/Labeled_mesh_domain_3.h>
