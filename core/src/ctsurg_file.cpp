@@ -37,6 +37,12 @@ void write_ctsurg_file(const std::filesystem::path& path, const std::string& for
   sidecar.commit();
 }
 
+std::string ctsurg_file_format(const std::filesystem::path& path) {
+  const h5::File f = h5::File::open(path);
+  const auto root = f.root();
+  return root.has_attribute("ctsurg_format") ? root.string_attribute("ctsurg_format") : std::string();
+}
+
 h5::File open_ctsurg_file(const std::filesystem::path& path, const std::string& format) {
   h5::File f = h5::File::open(path);
   const h5::Group root = f.root();

@@ -9,8 +9,8 @@
 #include <optional>
 
 #include "ctsurg/core/atomic_output.h"
+#include "ctsurg/core/ctsurg_file.h"
 #include "ctsurg/core/error.h"
-#include "ctsurg/core/hdf5_file.h"
 #include "ctsurg/core/hu_volume_file.h"
 #include "ctsurg/core/occupancy_grid_file.h"
 #include "ctsurg/core/provenance.h"
@@ -37,12 +37,7 @@ std::string suffix(const fs::path& p) {
 // The detail field: the tissue labels of an occupancy grid (/mask) or an HU volume at `iso`.
 ctsurg::DetailField read_detail_field(const fs::path& input, std::optional<double> iso, double sigma_mm, int threads,
                                       std::string& described) {
-  std::string format;
-  {
-    const ctsurg::h5::File f = ctsurg::h5::File::open(input);
-    const auto root = f.root();
-    if (root.has_attribute("ctsurg_format")) format = root.string_attribute("ctsurg_format");
-  }
+  const std::string format = ctsurg::ctsurg_file_format(input);
   if (format == "occupancy_grid") {
     if (iso)
       throw ctsurg::InputError("--iso", "", input.string() + " is an occupancy grid: its /mask is baked at 0.5; drop --iso");

@@ -2,8 +2,8 @@
 // HU volume) by marching cubes, as a ctsurg surface file (.h5 + XDMF) or a mesh for other programs
 // (.glb, .gltf, .obj, .stl, .ply).
 #include "ctsurg/core/atomic_output.h"
+#include "ctsurg/core/ctsurg_file.h"
 #include "ctsurg/core/error.h"
-#include "ctsurg/core/hdf5_file.h"
 #include "ctsurg/core/hu_volume_file.h"
 #include "ctsurg/core/occupancy_grid_file.h"
 #include "ctsurg/core/provenance.h"
@@ -34,12 +34,7 @@ struct Field {
 
 // The field to contour: /grid/fraction of an occupancy grid file or /hu of an HU volume file.
 Field read_field(const fs::path& input) {
-  std::string format;
-  {
-    const ctsurg::h5::File f = ctsurg::h5::File::open(input);
-    const auto root = f.root();
-    if (root.has_attribute("ctsurg_format")) format = root.string_attribute("ctsurg_format");
-  }
+  const std::string format = ctsurg::ctsurg_file_format(input);
   if (format == "occupancy_grid") return {ctsurg::read_occupancy_grid_file(input).fraction, "fraction", "/grid/fraction"};
   if (format == "hu_volume") return {ctsurg::read_hu_volume_file(input).hu, "HU", "/hu"};
   throw ctsurg::InputError(input.string(), "/@ctsurg_format",

@@ -27,4 +27,8 @@ void write_ctsurg_file(const std::filesystem::path& path, const std::string& for
 // Opens a ctsurg file and checks that /@ctsurg_format is `format` (InputError naming the file otherwise).
 h5::File open_ctsurg_file(const std::filesystem::path& path, const std::string& format);
 
+// /@ctsurg_format of a ctsurg file ("" when the HDF5 file has none), for tools that accept several
+// kinds of file. InputError naming the file when it is not HDF5.
+std::string ctsurg_file_format(const std::filesystem::path& path);
+
 }  // namespace ctsurg
