@@ -1,0 +1,78 @@
+// The trajectory: what a simulation run (ctsurg-sim) produces and the renderer reads. The surface's
+// vertices at each output frame, the surface's topology over time (a cut removes triangles), the
+// tools' positions, and per-frame metrics:
+//
+//   /provenance
+//   /trajectory                            attributes: scenario, model, surface_file, surface_sha256,
+//                                          dt_s, frames, vertices, frame "LPS", units "mm"
+//   /trajectory/time                       (F)        float64  s
+//   /trajectory/surface/rest_vertices      (V, 3)     float32  LPS mm (the surface file's vertices)
+//   /trajectory/surface/vertices           (F, V, 3)  float32  LPS mm
+//   /trajectory/surface/topologies/<k>     (T_k, 3)   uint32   triangles, k = "0", "1", ... in order
+//   /trajectory/surface/topology_of_frame  (F)        int32    the topology each frame uses
+//   /trajectory/metrics/<name>             (F)        float64  attribute units (e.g. kinetic_energy, nJ)
+//   /trajectory/tools/spheres              (F, S, 4)  float64  centre xyz LPS mm, radius mm (0: inactive)
+//                                          attribute kinds: "grab;probe;..." (one per sphere)
+//   /trajectory/tools/blades               (F, B, 7)  float64  edge end a xyz, end b xyz (LPS mm), active 1/0
+//   /trajectory/particles/rest_positions   (P, 3)     float32  optional: the model's nodes at rest
+//   /trajectory/particles/positions        (F, P, 3)  float32  optional: the nodes at each frame
+//
+// plus an XDMF sidecar: a temporal collection of the surface (and the particles as a point cloud),
+// with the displacement as a vector attribute, which ParaView plays as an animation.
+#pragma once
+
+#include "ctsurg/core/provenance.h"
+
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+namespace ctsurg {
+
+struct TrajectoryMetric {
+  std::string name;            // e.g. "kinetic_energy"
+  std::string units;           // e.g. "nJ"
+  std::vector<double> values;  // one per frame
+};
+
+struct Trajectory {
+  std::string scenario;        // the scenario's name
+  std::string model;           // the model kind, e.g. "spring_grid"
+  std::string surface_file;    // the surface the scenario named (as written in the scenario)
+  std::string surface_sha256;  // of that file's bytes, so a renderer can check it has the same surface
+  double dt_s = 0;             // the integration step
+
+  std::vector<double> time;                        // F, s
+  std::vector<float> rest_vertices;                // V x 3, LPS mm
+  std::vector<float> vertices;                     // F x V x 3, LPS mm
+  std::vector<std::vector<uint32_t>> topologies;   // each T_k x 3
+  std::vector<int32_t> topology_of_frame;          // F, index into topologies
+  std::vector<TrajectoryMetric> metrics;
+  std::vector<std::string> sphere_kinds;           // S: "grab" or "probe"
+  std::vector<double> spheres;                     // F x S x 4
+  std::vector<double> blades;                      // F x B x 7
+  std::vector<float> rest_particles;               // P x 3 or empty
+  std::vector<float> particles;                    // F x P x 3 or empty
+
+  int64_t frame_count() const { return static_cast<int64_t>(time.size()); }
+  int64_t vertex_count() const { return static_cast<int64_t>(rest_vertices.size() / 3); }
+  int64_t sphere_count() const { return static_cast<int64_t>(sphere_kinds.size()); }
+  int64_t blade_count() const { return frame_count() ? static_cast<int64_t>(blades.size()) / (7 * frame_count()) : 0; }
+  int64_t particle_count() const { return static_cast<int64_t>(rest_particles.size() / 3); }
+  // The metric called `name`, or nullptr.
+  const TrajectoryMetric* metric(const std::string& name) const;
+  // Frame f's vertices (V x 3) and triangles.
+  const float* frame_vertices(int64_t f) const { return vertices.data() + f * vertex_count() * 3; }
+  const std::vector<uint32_t>& frame_triangles(int64_t f) const { return topologies[topology_of_frame[f]]; }
+};
+
+// Checks every array's size against F, V, S, B, P and the triangles' vertex ids; InputError(file,
+// "/trajectory/...", ...) naming the first inconsistency (file: the name used in messages).
+void validate_trajectory(const Trajectory& trajectory, const std::string& file);
+// Writes `path` and its .xdmf sidecar atomically (validated first).
+void write_trajectory_file(const std::filesystem::path& path, const Trajectory& trajectory, const Provenance& provenance);
+// Reads and validates a trajectory file; InputError naming the file and dataset when it is not one.
+Trajectory read_trajectory_file(const std::filesystem::path& path);
+
+}  // namespace ctsurg

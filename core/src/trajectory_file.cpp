@@ -1,0 +1,265 @@
+#include "ctsurg/core/trajectory_file.h"
+
+#include "ctsurg/core/ctsurg_file.h"
+#include "ctsurg/core/error.h"
+#include "ctsurg/core/hdf5_file.h"
+
+#include <array>
+#include <sstream>
+
+namespace ctsurg {
+
+namespace {
+
+std::string join(const std::vector<std::string>& parts, char sep) {
+  std::string out;
+  for (size_t i = 0; i < parts.size(); ++i) out += (i ? std::string(1, sep) : std::string()) + parts[i];
+  return out;
+}
+
+std::vector<std::string> split(const std::string& text, char sep) {
+  std::vector<std::string> out;
+  if (text.empty()) return out;
+  std::string part;
+  std::istringstream in(text);
+  while (std::getline(in, part, sep)) out.push_back(part);
+  if (text.back() == sep) out.emplace_back();
+  return out;
+}
+
+// XDMF 3: a temporal collection with one triangle-mesh grid per frame; each frame's geometry is a
+// hyperslab of /trajectory/surface/vertices, its displacement (vertices - rest) a Function item.
+std::string trajectory_xdmf(const std::string& h5, const Trajectory& t) {
+  const int64_t nf = t.frame_count(), nv = t.vertex_count(), np = t.particle_count();
+  const std::string v = std::to_string(nv), f = std::to_string(nf);
+  std::ostringstream x;
+  x.precision(17);
+  x << "<?xml version=\"1.0\" ?>\n<!DOCTYPE Xdmf SYSTEM \"Xdmf.dtd\" []>\n"
+    << "<!-- ctsurg sidecar: opens " << h5 << " in ParaView (a time series). LPS millimetres, seconds. -->\n"
+    << "<Xdmf Version=\"3.0\">\n  <Domain>\n"
+    << "    <Grid Name=\"surface\" GridType=\"Collection\" CollectionType=\"Temporal\">\n";
+  const auto slab = [&](const std::string& dataset, int64_t frame, const std::string& rows, const std::string& frames) {
+    std::ostringstream s;
+    s << "<DataItem ItemType=\"HyperSlab\" Dimensions=\"" << rows << " 3\" Type=\"HyperSlab\">"
+      << "<DataItem Dimensions=\"3 3\" Format=\"XML\">" << frame << " 0 0 1 1 1 1 " << rows << " 3</DataItem>"
+      << "<DataItem Dimensions=\"" << frames << " " << rows << " 3\" NumberType=\"Float\" Precision=\"4\" Format=\"HDF\">"
+      << h5 << ":" << dataset << "</DataItem></DataItem>";
+    return s.str();
+  };
+  for (int64_t i = 0; i < nf; ++i) {
+    const int32_t k = t.topology_of_frame[i];
+    const std::string nt = std::to_string(t.topologies[k].size() / 3);
+    x << "      <Grid Name=\"frame " << i << "\" GridType=\"Uniform\">\n"
+      << "        <Time Value=\"" << t.time[i] << "\"/>\n"
+      << "        <Topology TopologyType=\"Triangle\" NumberOfElements=\"" << nt << "\">\n"
+      << "          <DataItem Dimensions=\"" << nt << " 3\" NumberType=\"UInt\" Precision=\"4\" Format=\"HDF\">" << h5
+      << ":/trajectory/surface/topologies/" << k << "</DataItem>\n"
+      << "        </Topology>\n"
+      << "        <Geometry GeometryType=\"XYZ\">" << slab("/trajectory/surface/vertices", i, v, f) << "</Geometry>\n"
+      << "        <Attribute Name=\"displacement_mm\" AttributeType=\"Vector\" Center=\"Node\">\n"
+      << "          <DataItem ItemType=\"Function\" Function=\"$0 - $1\" Dimensions=\"" << v << " 3\">"
+      << slab("/trajectory/surface/vertices", i, v, f) << "<DataItem Dimensions=\"" << v
+      << " 3\" NumberType=\"Float\" Precision=\"4\" Format=\"HDF\">" << h5
+      << ":/trajectory/surface/rest_vertices</DataItem></DataItem>\n"
+      << "        </Attribute>\n"
+      << "      </Grid>\n";
+  }
+  x << "    </Grid>\n";
+  if (np > 0) {
+    const std::string p = std::to_string(np);
+    x << "    <Grid Name=\"particles\" GridType=\"Collection\" CollectionType=\"Temporal\">\n";
+    for (int64_t i = 0; i < nf; ++i) {
+      x << "      <Grid Name=\"particles " << i << "\" GridType=\"Uniform\">\n"
+        << "        <Time Value=\"" << t.time[i] << "\"/>\n"
+        << "        <Topology TopologyType=\"Polyvertex\" NumberOfElements=\"" << p << "\"/>\n"
+        << "        <Geometry GeometryType=\"XYZ\">" << slab("/trajectory/particles/positions", i, p, f) << "</Geometry>\n"
+        << "      </Grid>\n";
+    }
+    x << "    </Grid>\n";
+  }
+  x << "  </Domain>\n</Xdmf>\n";
+  return x.str();
+}
+
+}  // namespace
+
+const TrajectoryMetric* Trajectory::metric(const std::string& name) const {
+  for (const auto& m : metrics) {
+    if (m.name == name) return &m;
+  }
+  return nullptr;
+}
+
+void validate_trajectory(const Trajectory& t, const std::string& file) {
+  const size_t nf = t.time.size();
+  if (nf == 0) throw InputError(file, "/trajectory/time", "the trajectory has no frames");
+  if (t.rest_vertices.empty() || t.rest_vertices.size() % 3 != 0) {
+    throw InputError(file, "/trajectory/surface/rest_vertices", "expected (V, 3) with V > 0");
+  }
+  const size_t nv = t.rest_vertices.size() / 3;
+  if (t.vertices.size() != nf * nv * 3) {
+    throw InputError(file, "/trajectory/surface/vertices",
+                     "expected (" + std::to_string(nf) + ", " + std::to_string(nv) + ", 3) for " + std::to_string(nf) +
+                         " frames of " + std::to_string(nv) + " vertices");
+  }
+  if (t.topologies.empty()) throw InputError(file, "/trajectory/surface/topologies", "no topology");
+  for (size_t k = 0; k < t.topologies.size(); ++k) {
+    const std::string where = "/trajectory/surface/topologies/" + std::to_string(k);
+    if (t.topologies[k].size() % 3 != 0) throw InputError(file, where, "expected (T, 3)");
+    for (const uint32_t i : t.topologies[k]) {
+      if (i >= nv) {
+        throw InputError(file, where, "vertex index " + std::to_string(i) + " out of range [0, " + std::to_string(nv) + ")");
+      }
+    }
+  }
+  if (t.topology_of_frame.size() != nf) {
+    throw InputError(file, "/trajectory/surface/topology_of_frame", "expected one entry per frame (" + std::to_string(nf) + ")");
+  }
+  for (const int32_t k : t.topology_of_frame) {
+    if (k < 0 || static_cast<size_t>(k) >= t.topologies.size()) {
+      throw InputError(file, "/trajectory/surface/topology_of_frame", "topology " + std::to_string(k) + " does not exist");
+    }
+  }
+  for (size_t i = 1; i < nf; ++i) {
+    if (!(t.time[i] > t.time[i - 1])) throw InputError(file, "/trajectory/time", "times must increase");
+  }
+  for (const auto& m : t.metrics) {
+    if (m.name.empty() || m.name.find_first_of("/;") != std::string::npos) {
+      throw InputError(file, "/trajectory/metrics", "metric name '" + m.name + "' is empty or contains '/' or ';'");
+    }
+    if (m.values.size() != nf) {
+      throw InputError(file, "/trajectory/metrics/" + m.name, "expected one value per frame (" + std::to_string(nf) + ")");
+    }
+  }
+  if (t.spheres.size() != nf * t.sphere_kinds.size() * 4) {
+    throw InputError(file, "/trajectory/tools/spheres", "expected (F, S, 4) with S = the number of sphere kinds");
+  }
+  if (t.blades.size() % (nf * 7) != 0) throw InputError(file, "/trajectory/tools/blades", "expected (F, B, 7)");
+  if (t.rest_particles.size() % 3 != 0 || t.particles.size() != nf * t.rest_particles.size()) {
+    throw InputError(file, "/trajectory/particles", "expected rest_positions (P, 3) and positions (F, P, 3)");
+  }
+}
+
+void write_trajectory_file(const std::filesystem::path& path, const Trajectory& t, const Provenance& provenance) {
+  validate_trajectory(t, path.string());
+  const uint64_t nf = t.time.size(), nv = static_cast<uint64_t>(t.vertex_count()),
+                 ns = t.sphere_kinds.size(), nb = static_cast<uint64_t>(t.blade_count()),
+                 np = static_cast<uint64_t>(t.particle_count());
+  write_ctsurg_file(
+      path, "trajectory", 1, provenance,
+      [&](h5::Group& root) {
+        h5::Group g = root.create_group("trajectory");
+        g.set_attribute("scenario", t.scenario);
+        g.set_attribute("model", t.model);
+        g.set_attribute("surface_file", t.surface_file);
+        g.set_attribute("surface_sha256", t.surface_sha256);
+        g.set_attribute("dt_s", t.dt_s);
+        g.set_attribute("frames", static_cast<int64_t>(nf));
+        g.set_attribute("vertices", static_cast<int64_t>(nv));
+        g.set_attribute("frame", std::string("LPS"));
+        g.set_attribute("units", std::string("mm"));
+        const std::array<uint64_t, 1> f1{nf};
+        g.write_dataset("time", t.time, f1);
+        h5::Group s = g.create_group("surface");
+        const std::array<uint64_t, 2> v3{nv, 3};
+        const std::array<uint64_t, 3> fv3{nf, nv, 3};
+        s.write_dataset("rest_vertices", t.rest_vertices, v3);
+        s.write_dataset("vertices", t.vertices, fv3);
+        s.write_dataset("topology_of_frame", t.topology_of_frame, f1);
+        h5::Group topo = s.create_group("topologies");
+        for (size_t k = 0; k < t.topologies.size(); ++k) {
+          const std::array<uint64_t, 2> t3{t.topologies[k].size() / 3, 3};
+          topo.write_dataset(std::to_string(k), t.topologies[k], t3);
+        }
+        h5::Group m = g.create_group("metrics");
+        for (const auto& metric : t.metrics) {
+          m.write_dataset(metric.name, metric.values, f1);
+        }
+        // The order and units as attributes of the metrics group, read back with the values.
+        std::vector<std::string> names;
+        for (const auto& metric : t.metrics) {
+          m.set_attribute(metric.name + "_units", metric.units);
+          names.push_back(metric.name);
+        }
+        m.set_attribute("names", join(names, ';'));
+        h5::Group tools = g.create_group("tools");
+        tools.set_attribute("kinds", join(t.sphere_kinds, ';'));
+        const std::array<uint64_t, 3> s4{nf, ns, 4}, b7{nf, nb, 7};
+        tools.write_dataset("spheres", t.spheres, s4);
+        tools.write_dataset("blades", t.blades, b7);
+        if (np > 0) {
+          h5::Group p = g.create_group("particles");
+          const std::array<uint64_t, 2> p3{np, 3};
+          const std::array<uint64_t, 3> fp3{nf, np, 3};
+          p.write_dataset("rest_positions", t.rest_particles, p3);
+          p.write_dataset("positions", t.particles, fp3);
+        }
+      },
+      trajectory_xdmf(path.filename().string(), t));
+}
+
+Trajectory read_trajectory_file(const std::filesystem::path& path) {
+  const std::string file = path.string();
+  const h5::File f = open_ctsurg_file(path, "trajectory");
+  const h5::Group g = f.root().open_group("trajectory");
+  Trajectory t;
+  t.scenario = g.string_attribute("scenario");
+  t.model = g.string_attribute("model");
+  t.surface_file = g.string_attribute("surface_file");
+  t.surface_sha256 = g.string_attribute("surface_sha256");
+  t.dt_s = g.double_attribute("dt_s");
+  std::vector<uint64_t> shape;
+  const auto expect = [&](const h5::Group& grp, const std::string& name, std::initializer_list<int64_t> dims) {
+    bool ok = shape.size() == dims.size();
+    size_t i = 0;
+    for (const int64_t d : dims) {
+      if (ok && d >= 0 && shape[i] != static_cast<uint64_t>(d)) ok = false;
+      ++i;
+    }
+    if (!ok) throw InputError(file, grp.path() + "/" + name, "unexpected shape");
+  };
+  t.time = g.read_dataset<double>("time", &shape);
+  expect(g, "time", {-1});
+  const int64_t nf = static_cast<int64_t>(shape[0]);
+  const h5::Group s = g.open_group("surface");
+  t.rest_vertices = s.read_dataset<float>("rest_vertices", &shape);
+  expect(s, "rest_vertices", {-1, 3});
+  const int64_t nv = static_cast<int64_t>(shape[0]);
+  t.vertices = s.read_dataset<float>("vertices", &shape);
+  expect(s, "vertices", {nf, nv, 3});
+  t.topology_of_frame = s.read_dataset<int32_t>("topology_of_frame", &shape);
+  expect(s, "topology_of_frame", {nf});
+  const h5::Group topo = s.open_group("topologies");
+  for (int64_t k = 0; topo.has(std::to_string(k)); ++k) {
+    t.topologies.push_back(topo.read_dataset<uint32_t>(std::to_string(k), &shape));
+    expect(topo, std::to_string(k), {-1, 3});
+  }
+  // The metrics in the order written (/trajectory/metrics@names), each with its units attribute.
+  const h5::Group m = g.open_group("metrics");
+  for (const auto& name : split(m.string_attribute("names"), ';')) {
+    TrajectoryMetric metric;
+    metric.name = name;
+    metric.values = m.read_dataset<double>(name, &shape);
+    expect(m, name, {nf});
+    metric.units = m.string_attribute(name + "_units");
+    t.metrics.push_back(std::move(metric));
+  }
+  const h5::Group tools = g.open_group("tools");
+  t.sphere_kinds = split(tools.string_attribute("kinds"), ';');
+  t.spheres = tools.read_dataset<double>("spheres", &shape);
+  expect(tools, "spheres", {nf, static_cast<int64_t>(t.sphere_kinds.size()), 4});
+  t.blades = tools.read_dataset<double>("blades", &shape);
+  expect(tools, "blades", {nf, -1, 7});
+  if (g.has("particles")) {
+    const h5::Group p = g.open_group("particles");
+    t.rest_particles = p.read_dataset<float>("rest_positions", &shape);
+    expect(p, "rest_positions", {-1, 3});
+    const int64_t np = static_cast<int64_t>(shape[0]);
+    t.particles = p.read_dataset<float>("positions", &shape);
+    expect(p, "positions", {nf, np, 3});
+  }
+  validate_trajectory(t, file);
+  return t;
+}
+
+}  // namespace ctsurg

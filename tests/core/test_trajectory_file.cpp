@@ -1,0 +1,159 @@
+// Tests for core/include/ctsurg/core/trajectory_file.h: round trip of every array and attribute
+// (topology changes, metrics, tools, optional particles), the XDMF sidecar, and validation errors.
+#include "ctsurg/core/trajectory_file.h"
+
+#include "ctsurg/core/error.h"
+#include "test_support.h"
+
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <sstream>
+
+namespace fs = std::filesystem;
+using ctsurg::test::TempDir;
+using ctsurg::test::test_provenance;
+
+namespace {
+
+// A tetrahedron's surface over three frames, moving up 1 mm per frame; frame 2 lost a triangle.
+ctsurg::Trajectory three_frames(bool particles) {
+  ctsurg::Trajectory t;
+  t.scenario = "unit";
+  t.model = "spring_grid";
+  t.surface_file = "surface.h5";
+  t.surface_sha256 = std::string(64, 'a');
+  t.dt_s = 1e-4;
+  t.time = {0.0, 0.01, 0.02};
+  t.rest_vertices = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1};
+  for (int f = 0; f < 3; ++f) {
+    for (int v = 0; v < 4; ++v) {
+      for (int c = 0; c < 3; ++c) t.vertices.push_back(t.rest_vertices[v * 3 + c] + (c == 2 ? float(f) : 0.f));
+    }
+  }
+  t.topologies = {{0, 2, 1, 0, 1, 3, 0, 3, 2, 1, 2, 3}, {0, 2, 1, 0, 1, 3, 0, 3, 2}};
+  t.topology_of_frame = {0, 0, 1};
+  t.metrics = {{"kinetic_energy", "nJ", {0, 1.5, 2}}, {"springs_cut", "1", {0, 0, 7}}};
+  t.sphere_kinds = {"grab", "probe"};
+  t.spheres.assign(3 * 2 * 4, 0.0);
+  t.spheres[4 + 3] = 2.5;  // frame 0, probe radius
+  t.blades.assign(3 * 1 * 7, 0.0);
+  t.blades[2 * 7 + 6] = 1.0;  // frame 2: blade active
+  if (particles) {
+    t.rest_particles = {0.5f, 0.5f, 0.5f};
+    t.particles = {0.5f, 0.5f, 0.5f, 0.5f, 0.5f, 1.5f, 0.5f, 0.5f, 2.5f};
+  }
+  return t;
+}
+
+std::string read_text(const fs::path& p) {
+  std::ifstream in(p);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+}  // namespace
+
+TEST(TrajectoryFile, RoundTripKeepsEveryArray) {
+  for (const bool particles : {false, true}) {
+    TempDir dir;
+    const fs::path p = dir.path() / "traj.h5";
+    const auto t = three_frames(particles);
+    ctsurg::write_trajectory_file(p, t, test_provenance());
+    const auto r = ctsurg::read_trajectory_file(p);
+    EXPECT_EQ(r.scenario, t.scenario);
+    EXPECT_EQ(r.model, t.model);
+    EXPECT_EQ(r.surface_file, t.surface_file);
+    EXPECT_EQ(r.surface_sha256, t.surface_sha256);
+    EXPECT_EQ(r.dt_s, t.dt_s);
+    EXPECT_EQ(r.time, t.time);
+    EXPECT_EQ(r.rest_vertices, t.rest_vertices);
+    EXPECT_EQ(r.vertices, t.vertices);
+    EXPECT_EQ(r.topologies, t.topologies);
+    EXPECT_EQ(r.topology_of_frame, t.topology_of_frame);
+    ASSERT_EQ(r.metrics.size(), 2u);
+    EXPECT_EQ(r.metrics[0].name, "kinetic_energy");
+    EXPECT_EQ(r.metrics[0].units, "nJ");
+    EXPECT_EQ(r.metrics[1].values, t.metrics[1].values);
+    ASSERT_NE(r.metric("springs_cut"), nullptr);
+    EXPECT_EQ(r.metric("nothing"), nullptr);
+    EXPECT_EQ(r.sphere_kinds, t.sphere_kinds);
+    EXPECT_EQ(r.spheres, t.spheres);
+    EXPECT_EQ(r.blades, t.blades);
+    EXPECT_EQ(r.blade_count(), 1);
+    EXPECT_EQ(r.rest_particles, t.rest_particles);
+    EXPECT_EQ(r.particles, t.particles);
+    EXPECT_EQ(r.frame_triangles(2).size(), 9u);
+    EXPECT_FLOAT_EQ(r.frame_vertices(2)[2], 2.f);
+    // The sidecar is a temporal collection with one grid per frame and the topology each frame uses.
+    const std::string x = read_text(dir.path() / "traj.xdmf");
+    EXPECT_NE(x.find("CollectionType=\"Temporal\""), std::string::npos);
+    EXPECT_NE(x.find("<Time Value=\"0.02\"/>"), std::string::npos);
+    EXPECT_NE(x.find("traj.h5:/trajectory/surface/topologies/1"), std::string::npos);
+    EXPECT_EQ(x.find("particles 0") != std::string::npos, particles);
+  }
+}
+
+TEST(TrajectoryFile, NoToolsAndNoMetricsRoundTrip) {
+  TempDir dir;
+  auto t = three_frames(false);
+  t.sphere_kinds.clear();
+  t.spheres.clear();
+  t.blades.clear();
+  t.metrics.clear();
+  ctsurg::write_trajectory_file(dir.path() / "t.h5", t, test_provenance());
+  const auto r = ctsurg::read_trajectory_file(dir.path() / "t.h5");
+  EXPECT_EQ(r.sphere_count(), 0);
+  EXPECT_EQ(r.blade_count(), 0);
+  EXPECT_TRUE(r.metrics.empty());
+  EXPECT_EQ(r.vertices, t.vertices);
+}
+
+TEST(TrajectoryFile, InconsistentArraysAreRefusedAndNothingIsWritten) {
+  TempDir dir;
+  const fs::path p = dir.path() / "bad.h5";
+  const auto expect_refused = [&](ctsurg::Trajectory t, const std::string& field) {
+    try {
+      ctsurg::write_trajectory_file(p, t, test_provenance());
+      ADD_FAILURE() << "accepted a trajectory with a bad " << field;
+    } catch (const ctsurg::InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(field), std::string::npos) << e.what();
+    }
+    EXPECT_FALSE(fs::exists(p));
+    EXPECT_FALSE(fs::exists(dir.path() / "bad.xdmf"));
+  };
+  auto t = three_frames(false);
+  t.vertices.pop_back();
+  expect_refused(t, "/trajectory/surface/vertices");
+  t = three_frames(false);
+  t.topologies[1][0] = 4;
+  expect_refused(t, "/trajectory/surface/topologies/1");
+  t = three_frames(false);
+  t.topology_of_frame[2] = 2;
+  expect_refused(t, "topology_of_frame");
+  t = three_frames(false);
+  t.time[2] = 0.01;
+  expect_refused(t, "/trajectory/time");
+  t = three_frames(false);
+  t.metrics[0].values.pop_back();
+  expect_refused(t, "/trajectory/metrics/kinetic_energy");
+  t = three_frames(false);
+  t.spheres.pop_back();
+  expect_refused(t, "/trajectory/tools/spheres");
+  t = three_frames(true);
+  t.particles.pop_back();
+  expect_refused(t, "/trajectory/particles");
+}
+
+TEST(TrajectoryFile, OtherFilesAreRefusedByName) {
+  TempDir dir;
+  const fs::path p = dir.path() / "not.h5";
+  std::ofstream(p) << "not hdf5";
+  try {
+    (void)ctsurg::read_trajectory_file(p);
+    ADD_FAILURE() << "read a text file as a trajectory";
+  } catch (const ctsurg::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("not.h5"), std::string::npos) << e.what();
+  }
+}
