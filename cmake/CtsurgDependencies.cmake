@@ -22,3 +22,16 @@ endif()
 find_package(assimp 5.2 REQUIRED)
 # CGAL (header-only, with GMP/MPFR) for tetrahedral meshing and surface decimation, confined to the .cpp files that use it.
 find_package(CGAL 5.5 REQUIRED)
+# OSMesa (Mesa's offscreen OpenGL, llvmpipe: an OpenGL 4.5 core context without a window system) for the
+# render stage; libOSMesa also exports the GL entry points, so nothing else is linked.
+find_path(OSMESA_INCLUDE_DIR GL/osmesa.h)
+find_library(OSMESA_LIBRARY OSMesa)
+if(NOT OSMESA_INCLUDE_DIR OR NOT OSMESA_LIBRARY)
+  message(FATAL_ERROR "OSMesa not found: install libosmesa6-dev (scripts/install-deps.sh)")
+endif()
+add_library(OSMesa::OSMesa UNKNOWN IMPORTED)
+set_target_properties(OSMesa::OSMesa PROPERTIES IMPORTED_LOCATION "${OSMESA_LIBRARY}"
+                      INTERFACE_INCLUDE_DIRECTORIES "${OSMESA_INCLUDE_DIR}")
+
+# Scenario files (sim/src/scenario.cpp): YAML (JSON is read as YAML 1.2 flow style).
+find_package(yaml-cpp REQUIRED)

@@ -106,7 +106,7 @@ StabilityGuard::StabilityGuard(std::vector<Real> rest_positions, double shortest
   if (!(max_step_ > 0)) throw InputError("stability", "max_step_mm", "must be > 0 (or a model with rest lengths > 0)");
 }
 
-StabilityReport StabilityGuard::check(const ParticleState& s, double time) {
+StabilityReport StabilityGuard::check(const ParticleState& s, double time, bool external_work) {
   StabilityReport r;
   r.time = time;
   const int32_t n = s.count();
@@ -128,7 +128,7 @@ StabilityReport StabilityGuard::check(const ParticleState& s, double time) {
       cause << "moved " << moved << " mm in one step (limit " << max_step_ << " mm)";
     else
       cause << "has a non-finite position";
-  } else if (last_energy_ >= 0 && energy > options_.energy_growth * std::max(last_energy_, options_.energy_floor)) {
+  } else if (!external_work && last_energy_ >= 0 && energy > options_.energy_growth * std::max(last_energy_, options_.energy_floor)) {
     cause << "kinetic energy grew from " << last_energy_ << " nJ to " << energy << " nJ since the last check";
     // Name the fastest particle.
     double best = -1;

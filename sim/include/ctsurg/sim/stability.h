@@ -72,7 +72,9 @@ class StabilityGuard {
   StabilityGuard(std::vector<Real> rest_positions, double shortest_rest_length, double dt,
                  const StabilityGuardOptions& options = {});
   // Checks the state at `time` (s). Deterministic (lowest offending id), parallel over particles.
-  StabilityReport check(const ParticleState& state, double time);
+  // external_work: tools moved particles since the last check (a probe or grab does work on the
+  // system, so energy growth is expected); only the non-finite and step-size tests apply then.
+  StabilityReport check(const ParticleState& state, double time, bool external_work = false);
   // check(), then throws RuntimeError(report.message) when unstable.
   void enforce(const ParticleState& state, double time);
 
