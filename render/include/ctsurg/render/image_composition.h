@@ -1,0 +1,24 @@
+// Comparison pictures from rendered images: side by side with captions, overlays, and the colour bar
+// of a heat map with its scale in millimetres. Text through OpenCV's Hershey fonts (deterministic,
+// no font files), confined to image_composition.cpp.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "ctsurg/render/rgb_image.h"
+
+namespace ctsurg {
+
+// Writes `text` in white on a dark band at the top-left corner of `image` (scaled to its size).
+void draw_caption(RgbImage& image, const std::string& text);
+// The images (same height) left to right with a 4-pixel separator. InputError when heights differ.
+RgbImage side_by_side(const std::vector<RgbImage>& images);
+// a and b (same size) blended: each pixel (a + b) / 2, so the two shapes show through each other
+// (render them in different colours). InputError when sizes differ.
+RgbImage overlay(const RgbImage& a, const RgbImage& b);
+// `image` widened on the right by a vertical Turbo colour bar from 0 (bottom) to max_mm (top) with
+// tick labels in mm and `title` (e.g. "displacement (mm)").
+RgbImage append_colour_bar(const RgbImage& image, double max_mm, const std::string& title);
+
+}  // namespace ctsurg

@@ -1,0 +1,49 @@
+// One picture's content: the surface's vertex positions and triangles at an instant, the tools, and
+// optionally a value per vertex for a heat map; built from a rest surface or a trajectory frame.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "ctsurg/core/surface_mesh_file.h"
+#include "ctsurg/core/trajectory_file.h"
+#include "ctsurg/render/camera.h"
+
+namespace ctsurg {
+
+struct ToolSphere {
+  float centre[3];  // LPS mm
+  float radius;     // mm (> 0)
+  bool grab;        // grab (drawn green) or probe (drawn blue)
+};
+struct ToolBlade {
+  float a[3], b[3];  // the cutting edge's ends, LPS mm
+};
+
+struct SceneFrame {
+  const float* vertices = nullptr;                // #V x 3, LPS mm (not owned)
+  const std::vector<uint32_t>* triangles = nullptr;  // #T x 3 (not owned)
+  int topology = 0;                               // id of `triangles` (cache key for frames)
+  std::vector<ToolSphere> spheres;                // active spheres only
+  std::vector<ToolBlade> blades;                  // active blades only
+  std::vector<float> values;                      // #V heat-map values (mm) or empty
+};
+
+// The rest surface (topology id -1).
+SceneFrame rest_scene_frame(const SurfaceMesh& surface);
+// Frame f of a trajectory (tools included; topology id = the trajectory's topology index).
+SceneFrame trajectory_scene_frame(const Trajectory& trajectory, int64_t f);
+
+// InputError naming both files and /trajectory/surface/rest_vertices when the trajectory's vertex
+// count differs from the surface's (the trajectory was made with another surface).
+void check_trajectory_matches_surface(const Trajectory& trajectory, const std::string& trajectory_file,
+                                      const SurfaceMesh& surface, const std::string& surface_file);
+
+// Per-vertex distance |a_v - b_v| (mm) between two #V x 3 position arrays.
+std::vector<float> vertex_distances(const float* a, const float* b, int64_t vertex_count);
+
+// The sphere holding the rest surface and every listed trajectory frame (frames may be empty).
+BoundingSphere scene_bounds(const SurfaceMesh& surface, const Trajectory* trajectory, const std::vector<int64_t>& frames);
+
+}  // namespace ctsurg

@@ -1,0 +1,66 @@
+#include "ctsurg/render/scene_frame.h"
+
+#include <cmath>
+
+#include "ctsurg/core/error.h"
+
+namespace ctsurg {
+
+SceneFrame rest_scene_frame(const SurfaceMesh& surface) {
+  SceneFrame f;
+  f.vertices = surface.vertices.data();
+  f.triangles = &surface.triangles;
+  f.topology = -1;
+  return f;
+}
+
+SceneFrame trajectory_scene_frame(const Trajectory& trajectory, int64_t f) {
+  SceneFrame s;
+  s.vertices = trajectory.frame_vertices(f);
+  s.triangles = &trajectory.frame_triangles(f);
+  s.topology = trajectory.topology_of_frame[static_cast<std::size_t>(f)];
+  const int64_t n_spheres = trajectory.sphere_count();
+  for (int64_t i = 0; i < n_spheres && !trajectory.spheres.empty(); ++i) {
+    const double* q = trajectory.spheres.data() + 4 * (f * n_spheres + i);
+    if (!(q[3] > 0.0)) continue;
+    ToolSphere t{{float(q[0]), float(q[1]), float(q[2])}, float(q[3]),
+                 trajectory.sphere_kinds[static_cast<std::size_t>(i)] == "grab"};
+    s.spheres.push_back(t);
+  }
+  const int64_t n_blades = trajectory.blade_count();
+  for (int64_t i = 0; i < n_blades; ++i) {
+    const double* q = trajectory.blades.data() + 7 * (f * n_blades + i);
+    if (q[6] == 0.0) continue;
+    s.blades.push_back({{float(q[0]), float(q[1]), float(q[2])}, {float(q[3]), float(q[4]), float(q[5])}});
+  }
+  return s;
+}
+
+void check_trajectory_matches_surface(const Trajectory& trajectory, const std::string& trajectory_file,
+                                      const SurfaceMesh& surface, const std::string& surface_file) {
+  if (trajectory.vertex_count() != surface.vertex_count()) {
+    throw InputError(trajectory_file, "/trajectory/surface/rest_vertices",
+                     std::to_string(trajectory.vertex_count()) + " vertices, but the surface " + surface_file + " has " +
+                         std::to_string(surface.vertex_count()) +
+                         " (/surface/vertices): the trajectory was simulated with another surface");
+  }
+  if (trajectory.frame_count() < 1) throw InputError(trajectory_file, "/trajectory/time", "no frames");
+}
+
+std::vector<float> vertex_distances(const float* a, const float* b, int64_t vertex_count) {
+  std::vector<float> d(static_cast<std::size_t>(vertex_count));
+  for (int64_t v = 0; v < vertex_count; ++v) {
+    const double dx = double(a[3 * v]) - b[3 * v], dy = double(a[3 * v + 1]) - b[3 * v + 1], dz = double(a[3 * v + 2]) - b[3 * v + 2];
+    d[static_cast<std::size_t>(v)] = static_cast<float>(std::sqrt(dx * dx + dy * dy + dz * dz));
+  }
+  return d;
+}
+
+BoundingSphere scene_bounds(const SurfaceMesh& surface, const Trajectory* trajectory, const std::vector<int64_t>& frames) {
+  BoundingSphere s = bounding_sphere(surface.vertices.data(), surface.vertex_count());
+  if (trajectory)
+    for (const int64_t f : frames) s = bounding_sphere(trajectory->frame_vertices(f), trajectory->vertex_count(), s);
+  return s;
+}
+
+}  // namespace ctsurg

@@ -1,0 +1,196 @@
+// ctsurg-render --surface S.h5 [--trajectory T.h5] -o OUT.png: pictures of a surface or of a
+// simulation's frames (normal-mapped, offscreen OpenGL 4.5 core through OSMesa), turntables, and
+// comparisons (side by side, overlay, heat map with a colour bar in mm); optionally an animation.
+#include <spdlog/spdlog.h>
+
+#include <chrono>
+#include <fstream>
+#include <memory>
+#include <optional>
+
+#include "ctsurg/core/atomic_output.h"
+#include "ctsurg/core/ctsurg_file.h"
+#include "ctsurg/core/error.h"
+#include "ctsurg/core/surface_mesh_file.h"
+#include "ctsurg/core/tool_app.h"
+#include "ctsurg/core/trajectory_file.h"
+#include "ctsurg/render/animation_export.h"
+#include "ctsurg/render/render_pictures.h"
+
+namespace fs = std::filesystem;
+
+namespace {
+
+std::string lower_suffix(const fs::path& p) {
+  std::string s = p.extension().string();
+  for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return s;
+}
+
+// OUT with "{}" replaced by the picture's tag.
+fs::path output_name(const std::string& pattern, const std::string& tag) {
+  const auto at = pattern.find("{}");
+  return at == std::string::npos ? fs::path(pattern) : fs::path(pattern.substr(0, at) + tag + pattern.substr(at + 2));
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::string surface_path, trajectory_path, output, frames_spec, view_spec = "anterior", projection = "perspective";
+  std::string layout = "single", reference = "rest", animation;
+  std::string size_spec = "512";
+  int samples = 4, turntable = 0;
+  double heat_max = 0.0, fps = 10.0;
+  bool no_normal_map = false, no_tools = false, no_captions = false;
+  return ctsurg::run_tool(
+      argc, argv, "ctsurg-render",
+      "Render a surface file (ctsurg-surface / ctsurg-normalmap) or the frames of a trajectory simulated on it "
+      "(ctsurg-sim) to PNG: offscreen OpenGL 4.5 core (OSMesa llvmpipe, no window system), per-pixel lighting with "
+      "the baked normal map in tangent frames that follow the deformation, two-sided shading for cuts, tools as "
+      "translucent spheres and blades, automatic framing, named views in the LPS frame. Comparisons: side by side or "
+      "overlay against the rest surface or another model, or a heat map of the displacement (or the difference from "
+      "another model) with a colour bar in mm. Deterministic: the same input gives the same pixels.",
+      [&](CLI::App& app) {
+        app.add_option("--surface,-s", surface_path, "Surface file (.h5), e.g. surface_textured.h5")->required();
+        app.add_option("--trajectory,-t", trajectory_path, "Trajectory file (.h5) simulated on that surface");
+        app.add_option("--output,-o", output,
+                       "PNG to write; with several pictures it must contain {} (replaced by the frame number, "
+                       "'rest' or 'turnNNN')")
+            ->required();
+        app.add_option("--frames", frames_spec,
+                       "Frames: rest, last, all, N, A:B, A:B:STEP, or a comma list (default: last with a trajectory, "
+                       "else rest)");
+        app.add_option("--view", view_spec,
+                       "anterior, posterior, left, right, superior, inferior, or AZIMUTH,ELEVATION in degrees "
+                       "(0,0 = anterior, 90,0 = left)")
+            ->capture_default_str();
+        app.add_option("--projection", projection, "perspective or orthographic")
+            ->capture_default_str()
+            ->check(CLI::IsMember({"perspective", "orthographic"}));
+        app.add_option("--size", size_spec, "Picture size in pixels: N (square) or WxH")->capture_default_str();
+        app.add_option("--samples", samples, "Multisampling: 1 (none) or 4")->capture_default_str()->check(CLI::IsMember({1, 2, 4}));
+        app.add_option("--layout", layout,
+                       "single, side-by-side (reference | model), overlay (reference blue, model orange) or heat-map "
+                       "(distance to the reference, mm)")
+            ->capture_default_str()
+            ->check(CLI::IsMember({"single", "side-by-side", "overlay", "heat-map"}));
+        app.add_option("--reference", reference,
+                       "What comparisons compare with: rest (the model's rest surface), a trajectory file (another "
+                       "model or backend, same frame) or a surface file")
+            ->capture_default_str();
+        app.add_option("--heat-max-mm", heat_max, "Top of the heat map's colour bar in mm (default: the largest value)")
+            ->check(CLI::PositiveNumber);
+        app.add_option("--turntable", turntable, "Render this many views around the superior axis (of the first frame)")
+            ->check(CLI::Range(1, 3600));
+        app.add_option("--animation", animation, "Also write the pictures as an animation: .gif or .mp4 (needs ffmpeg or ImageMagick)");
+        app.add_option("--fps", fps, "Animation frames per second")->capture_default_str()->check(CLI::Range(0.1, 120.0));
+        app.add_flag("--no-normal-map", no_normal_map, "Ignore the surface's normal map (geometry normals only)");
+        app.add_flag("--no-tools", no_tools, "Do not draw the trajectory's spheres and blades");
+        app.add_flag("--no-captions", no_captions, "No frame and model captions on the pictures");
+      },
+      [&](const ctsurg::ToolContext&) {
+        const auto start = std::chrono::steady_clock::now();
+        // Arguments first, so bad usage fails before any file is read.
+        if (lower_suffix(output) != ".png") throw ctsurg::InputError(output, "suffix", "the output is a PNG: use .png");
+        ctsurg::PictureRequest request;
+        {
+          const auto x = size_spec.find('x');
+          try {
+            std::size_t used = 0;
+            if (x == std::string::npos) {
+              request.width = request.height = std::stoi(size_spec, &used);
+              if (used != size_spec.size()) throw std::invalid_argument("size");
+            } else {
+              request.width = std::stoi(size_spec.substr(0, x), &used);
+              if (used != x) throw std::invalid_argument("size");
+              request.height = std::stoi(size_spec.substr(x + 1), &used);
+              if (used != size_spec.size() - x - 1) throw std::invalid_argument("size");
+            }
+          } catch (const std::exception&) {
+            throw ctsurg::InputError("--size", "", "'" + size_spec + "' is not N or WxH");
+          }
+          if (request.width < 1 || request.height < 1 || request.width > 16384 || request.height > 16384) {
+            throw ctsurg::InputError("--size", "", "each side must be 1 .. 16384 pixels, got " + size_spec);
+          }
+        }
+        request.samples = samples;
+        request.view = ctsurg::parse_view(view_spec);
+        request.projection = projection == "orthographic" ? ctsurg::Projection::orthographic : ctsurg::Projection::perspective;
+        request.layout = layout == "side-by-side" ? ctsurg::Layout::side_by_side
+                         : layout == "overlay"    ? ctsurg::Layout::overlay
+                         : layout == "heat-map"   ? ctsurg::Layout::heat_map
+                                                  : ctsurg::Layout::single;
+        request.turntable_steps = turntable;
+        request.heat_max_mm = heat_max;
+        request.captions = !no_captions;
+        request.style.normal_map = !no_normal_map;
+        request.style.tools = !no_tools;
+        if (!animation.empty()) ctsurg::check_animation_output(animation);
+
+        // Inputs.
+        const ctsurg::SurfaceMesh surface = ctsurg::read_surface_mesh_file(surface_path);
+        std::optional<ctsurg::Trajectory> trajectory;
+        if (!trajectory_path.empty()) trajectory = ctsurg::read_trajectory_file(trajectory_path);
+        ctsurg::RenderModel model{&surface, surface_path, trajectory ? &*trajectory : nullptr, trajectory_path};
+        if (trajectory) {
+          ctsurg::check_trajectory_matches_surface(*trajectory, trajectory_path, surface, surface_path);
+          request.frames = ctsurg::parse_frames(frames_spec.empty() ? "last" : frames_spec, trajectory->frame_count());
+        } else if (!frames_spec.empty() && frames_spec != "rest") {
+          throw ctsurg::InputError("--frames", "", "'" + frames_spec + "' needs --trajectory; without one only the rest surface is drawn");
+        }
+        if (request.style.normal_map && surface.normal_map.empty()) {
+          spdlog::warn("{} has no normal map (/surface/normal_map): shading with its normals only (run ctsurg-normalmap "
+                       "for the detail)", surface_path);
+        }
+        std::optional<ctsurg::SurfaceMesh> reference_surface;
+        std::optional<ctsurg::Trajectory> reference_trajectory;
+        if (reference != "rest") {
+          if (request.layout == ctsurg::Layout::single)
+            throw ctsurg::InputError("--reference", "", "is used by --layout side-by-side, overlay or heat-map");
+          request.reference_is_rest = false;
+          const std::string format = ctsurg::ctsurg_file_format(reference);
+          if (format == "trajectory") {
+            reference_trajectory = ctsurg::read_trajectory_file(reference);
+            // Another run on the same surface (model B, or the GPU backend) unless its vertex count says otherwise.
+            if (reference_trajectory->vertex_count() != surface.vertex_count()) {
+              throw ctsurg::InputError(reference, "/trajectory/surface/rest_vertices",
+                                       std::to_string(reference_trajectory->vertex_count()) + " vertices, but " +
+                                           surface_path + " has " + std::to_string(surface.vertex_count()) +
+                                           ": compare trajectories simulated on the same surface");
+            }
+            request.reference = {&surface, surface_path, &*reference_trajectory, reference};
+          } else if (format == "surface_mesh") {
+            reference_surface = ctsurg::read_surface_mesh_file(reference);
+            request.reference = {&*reference_surface, reference, nullptr, ""};
+          } else {
+            throw ctsurg::InputError(reference, "/@ctsurg_format",
+                                     "expected a trajectory or a surface file, found '" + (format.empty() ? std::string("none") : format) + "'");
+          }
+        }
+        const std::size_t expected = request.turntable_steps > 0 ? static_cast<std::size_t>(request.turntable_steps)
+                                                                  : std::max<std::size_t>(1, request.frames.size());
+        if (expected > 1 && output.find("{}") == std::string::npos) {
+          throw ctsurg::InputError(output, "name", std::to_string(expected) + " pictures: the output name needs {} for the frame number");
+        }
+        ctsurg::check_output_path(output_name(output, "x"));
+
+        // Render; each picture goes to a temporary file, all are renamed into place at the end.
+        std::vector<std::unique_ptr<ctsurg::AtomicOutput>> outputs;
+        std::vector<ctsurg::RgbImage> animation_frames;
+        ctsurg::render_pictures(model, request, [&](ctsurg::Picture&& picture) {
+          const std::vector<uint8_t> png = ctsurg::encode_png(picture.image);
+          auto out = std::make_unique<ctsurg::AtomicOutput>(output_name(output, picture.tag));
+          std::ofstream file(out->temp_path(), std::ios::binary);
+          file.write(reinterpret_cast<const char*>(png.data()), static_cast<std::streamsize>(png.size()));
+          if (!file) throw ctsurg::RuntimeError(out->path().string() + ": write failed");
+          outputs.push_back(std::move(out));
+          if (!animation.empty()) animation_frames.push_back(std::move(picture.image));
+        });
+        if (!animation.empty()) ctsurg::write_animation(animation, animation_frames, fps);
+        for (auto& out : outputs) out->commit();
+        spdlog::info("wrote {} picture{} ({}{}) in {:.2f} s", outputs.size(), outputs.size() == 1 ? "" : "s",
+                     outputs.size() == 1 ? outputs.front()->path().string() : output,
+                     animation.empty() ? "" : ", " + animation,
+                     std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+      });
+}

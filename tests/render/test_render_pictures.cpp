@@ -1,0 +1,182 @@
+// Golden images of the render stage (render_pictures.h over surface_renderer.h): the normal-mapped
+// synthetic organ at rest, grabbed (with the grab sphere), cut (the slit's inside, the blade), and a
+// displacement heat map with its colour bar; compared with tests/render/golden/*.png within a stated
+// tolerance. Also: the normal map must be visible (ignoring it fails the golden), two renders are
+// identical, and sequences share one camera.
+//
+// Regenerate the goldens (after a deliberate change; look at them before committing):
+//   CTSURG_UPDATE_GOLDEN=1 build/bin/test_render_pictures
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <fstream>
+
+#include "ctsurg/core/error.h"
+#include "ctsurg/render/render_pictures.h"
+#include "render_test_scenes.h"
+#include "test_support.h"
+
+namespace fs = std::filesystem;
+
+namespace {
+
+// A pixel "differs" when some channel differs by more than kTolerance (out of 255); at most
+// kMaxDifferingFraction of the pixels may differ. llvmpipe is deterministic on one machine; the slack
+// covers other LLVM versions and vector widths (rounding in the rasteriser's interpolation).
+constexpr int kTolerance = 12;
+constexpr double kMaxDifferingFraction = 0.01;
+constexpr int kSize = 128;
+
+fs::path golden_dir() { return ctsurg::test::source_dir() / "tests" / "render" / "golden"; }
+
+ctsurg::RgbImage render_one(const ctsurg::SurfaceMesh& surface, const ctsurg::Trajectory* trajectory, int64_t frame,
+                            ctsurg::Layout layout = ctsurg::Layout::single, bool normal_map = true) {
+  ctsurg::RenderModel model{&surface, "organ.h5", trajectory, "organ_trajectory.h5"};
+  ctsurg::PictureRequest request;
+  request.width = request.height = kSize;
+  request.view = ctsurg::parse_view("anterior");
+  if (frame >= 0) request.frames = {frame};
+  request.layout = layout;
+  request.captions = false;
+  request.style.normal_map = normal_map;
+  // Frame every golden on all three frames, so the pictures line up.
+  ctsurg::RgbImage out;
+  std::vector<ctsurg::Picture> pictures;
+  ctsurg::render_pictures(model, request, [&](ctsurg::Picture&& p) { pictures.push_back(std::move(p)); });
+  EXPECT_EQ(pictures.size(), 1u);
+  return pictures.empty() ? out : pictures.front().image;
+}
+
+void check_golden(const ctsurg::RgbImage& image, const std::string& name) {
+  const fs::path path = golden_dir() / name;
+  if (std::getenv("CTSURG_UPDATE_GOLDEN")) {
+    const std::vector<uint8_t> png = ctsurg::encode_png(image);
+    std::ofstream(path, std::ios::binary).write(reinterpret_cast<const char*>(png.data()), std::streamsize(png.size()));
+    std::cout << "updated " << path << "\n";
+    return;
+  }
+  ASSERT_TRUE(fs::exists(path)) << path << " missing: regenerate with CTSURG_UPDATE_GOLDEN=1";
+  const ctsurg::RgbImage golden = ctsurg::read_png(path);
+  const ctsurg::ImageDifference d = ctsurg::compare_images(image, golden, kTolerance);
+  EXPECT_LE(d.fraction_over_tolerance, kMaxDifferingFraction)
+      << name << ": " << d.pixels_over_tolerance << " pixels differ by more than " << kTolerance
+      << " (max channel difference " << d.max_channel_difference << ", mean " << d.mean_channel_difference << ")";
+  if (d.fraction_over_tolerance > kMaxDifferingFraction) {
+    const fs::path actual = fs::temp_directory_path() / ("actual_" + name);
+    const std::vector<uint8_t> png = ctsurg::encode_png(image);
+    std::ofstream(actual, std::ios::binary).write(reinterpret_cast<const char*>(png.data()), std::streamsize(png.size()));
+    std::cout << "the rendered picture is in " << actual << "\n";
+  }
+}
+
+// Pixels that are not the background.
+double covered_fraction(const ctsurg::RgbImage& img) {
+  const uint8_t* bg = img.pixel(0, 0);
+  int64_t n = 0;
+  for (int y = 0; y < img.height; ++y)
+    for (int x = 0; x < img.width; ++x) {
+      const uint8_t* p = img.pixel(x, y);
+      n += std::abs(p[0] - bg[0]) + std::abs(p[1] - bg[1]) + std::abs(p[2] - bg[2]) > 12;
+    }
+  return double(n) / (double(img.width) * img.height);
+}
+
+class RenderPictures : public ::testing::Test {
+ protected:
+  ctsurg::SurfaceMesh surface = ctsurg::test::bumpy_organ_surface();
+  ctsurg::Trajectory trajectory = ctsurg::test::three_frame_trajectory(surface);
+};
+
+}  // namespace
+
+TEST_F(RenderPictures, RestMatchesGolden) {
+  const ctsurg::RgbImage img = render_one(surface, &trajectory, 0);
+  EXPECT_GT(covered_fraction(img), 0.3);  // framed: the organ fills much of the picture
+  EXPECT_LT(covered_fraction(img), 0.9);
+  check_golden(img, "rest.png");
+}
+
+TEST_F(RenderPictures, GrabbedMatchesGolden) { check_golden(render_one(surface, &trajectory, 1), "grabbed.png"); }
+
+TEST_F(RenderPictures, CutMatchesGolden) { check_golden(render_one(surface, &trajectory, 2), "cut.png"); }
+
+TEST_F(RenderPictures, HeatMapMatchesGolden) {
+  check_golden(render_one(surface, &trajectory, 1, ctsurg::Layout::heat_map), "heat_map.png");
+}
+
+TEST_F(RenderPictures, IgnoringTheNormalMapFailsTheGolden) {
+  // The detail lives only in the map: without it the rest picture is a smooth ellipsoid, which must
+  // not pass for the golden, and must differ clearly from the mapped render.
+  const ctsurg::RgbImage with = render_one(surface, &trajectory, 0);
+  const ctsurg::RgbImage without = render_one(surface, &trajectory, 0, ctsurg::Layout::single, false);
+  const ctsurg::ImageDifference d = ctsurg::compare_images(with, without, kTolerance);
+  EXPECT_GT(d.fraction_over_tolerance, 0.1) << "the normal map barely changes the picture";
+  if (!std::getenv("CTSURG_UPDATE_GOLDEN")) {
+    const ctsurg::RgbImage golden = ctsurg::read_png(golden_dir() / "rest.png");
+    EXPECT_GT(ctsurg::compare_images(without, golden, kTolerance).fraction_over_tolerance, kMaxDifferingFraction);
+  }
+}
+
+TEST_F(RenderPictures, SameInputSamePixels) {
+  const ctsurg::RgbImage a = render_one(surface, &trajectory, 2);
+  const ctsurg::RgbImage b = render_one(surface, &trajectory, 2);
+  EXPECT_EQ(a.rgb, b.rgb);
+  EXPECT_EQ(ctsurg::encode_png(a), ctsurg::encode_png(b));
+}
+
+TEST_F(RenderPictures, RestFrameEqualsRestSurface) {
+  // Frame 0 of the trajectory is the rest shape: the deformed tangent frames reduce to the file's.
+  const ctsurg::RgbImage from_trajectory = render_one(surface, &trajectory, 0);
+  const ctsurg::RgbImage from_surface = render_one(surface, nullptr, -1);
+  const ctsurg::ImageDifference d = ctsurg::compare_images(from_trajectory, from_surface, 2);
+  EXPECT_LE(d.fraction_over_tolerance, 0.002);
+}
+
+TEST_F(RenderPictures, SideBySideAndOverlayHaveTheRightShape) {
+  const ctsurg::RgbImage sbs = render_one(surface, &trajectory, 1, ctsurg::Layout::side_by_side);
+  EXPECT_EQ(sbs.width, 2 * kSize + 4);
+  EXPECT_EQ(sbs.height, kSize);
+  const ctsurg::RgbImage ov = render_one(surface, &trajectory, 1, ctsurg::Layout::overlay);
+  EXPECT_EQ(ov.width, kSize);
+}
+
+TEST_F(RenderPictures, SequenceTagsAndTurntable) {
+  ctsurg::RenderModel model{&surface, "organ.h5", &trajectory, "t.h5"};
+  ctsurg::PictureRequest request;
+  request.width = request.height = 32;
+  request.samples = 1;
+  request.view = ctsurg::parse_view("left");
+  request.frames = ctsurg::parse_frames("0:2", trajectory.frame_count());
+  std::vector<std::string> tags;
+  ctsurg::render_pictures(model, request, [&](ctsurg::Picture&& p) { tags.push_back(p.tag); });
+  EXPECT_EQ(tags, (std::vector<std::string>{"0000", "0001", "0002"}));
+  request.turntable_steps = 4;
+  tags.clear();
+  ctsurg::render_pictures(model, request, [&](ctsurg::Picture&& p) { tags.push_back(p.tag); });
+  EXPECT_EQ(tags, (std::vector<std::string>{"turn000", "turn001", "turn002", "turn003"}));
+}
+
+TEST(ParseFrames, SpecsAndErrors) {
+  EXPECT_EQ(ctsurg::parse_frames("last", 5), (std::vector<int64_t>{4}));
+  EXPECT_EQ(ctsurg::parse_frames("0,2,2,1", 5), (std::vector<int64_t>{0, 1, 2}));
+  EXPECT_EQ(ctsurg::parse_frames("0:4:2", 5), (std::vector<int64_t>{0, 2, 4}));
+  EXPECT_TRUE(ctsurg::parse_frames("rest", 5).empty());
+  EXPECT_THROW(ctsurg::parse_frames("5", 5), ctsurg::InputError);
+  EXPECT_THROW(ctsurg::parse_frames("x", 5), ctsurg::InputError);
+  EXPECT_THROW(ctsurg::parse_frames("0:3:0", 5), ctsurg::InputError);
+}
+
+TEST_F(RenderPictures, MismatchedTrajectoryIsRefused) {
+  ctsurg::Trajectory other = trajectory;
+  other.rest_vertices.resize(other.rest_vertices.size() - 3);
+  ctsurg::RenderModel model{&surface, "organ.h5", &other, "other.h5"};
+  ctsurg::PictureRequest request;
+  request.frames = {0};
+  try {
+    ctsurg::render_pictures(model, request, [](ctsurg::Picture&&) {});
+    FAIL() << "no error";
+  } catch (const ctsurg::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("organ.h5"), std::string::npos);
+    EXPECT_NE(std::string(e.what()).find("other.h5"), std::string::npos);
+  }
+}
