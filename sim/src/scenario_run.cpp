@@ -62,10 +62,13 @@ struct ResolvedPath {
   }
 };
 
-ResolvedPath resolve_path(const ToolAction& tool, const Bounds& bounds, const std::vector<Real>& rest, std::string* note) {
+// In the simulation's frame: LPS minus `origin` (see run_scenario).
+ResolvedPath resolve_path(const ToolAction& tool, const Bounds& bounds, const std::vector<Real>& rest, const Vec3& origin,
+                          std::string* note) {
   ResolvedPath r;
   for (const auto& k : tool.path) {
     Vec3 p = k.point.value;
+    if (k.point.kind == PointSpec::Kind::position_mm) p = {p[0] - origin[0], p[1] - origin[1], p[2] - origin[2]};
     if (k.point.kind == PointSpec::Kind::at_fraction) p = bounds.at(p);
     if (k.point.kind == PointSpec::Kind::offset_mm) p = {r.p.front()[0] + p[0], r.p.front()[1] + p[1], r.p.front()[2] + p[2]};
     r.t.push_back(k.t);
@@ -132,7 +135,19 @@ Trajectory run_scenario(const Scenario& s, RunReport* report_out, const std::fun
   if (s.backend == "cuda") require_backend(Backend::cuda, sfile + ": backend");
 
   // The model.
-  const OccupancyGrid grid = read_occupancy_grid_file(s.grid);
+  // The simulation runs in LPS shifted by `origin`, a whole-millimetre point near the grid's centre:
+  // a heart at z = 650 mm would otherwise keep positions in float with a resolution of 6e-5 mm, and
+  // spring lengths (differences of positions) lose relative precision with it. Inputs are shifted on
+  // entry and outputs shifted back (in double before rounding to the file's float).
+  OccupancyGrid grid = read_occupancy_grid_file(s.grid);
+  const auto& dims = grid.occupancy.geometry.dims;
+  const Eigen::Vector3d centre = grid.occupancy.geometry.index_to_world(
+      0.5 * Eigen::Vector3d(static_cast<double>(dims[0] - 1), static_cast<double>(dims[1] - 1), static_cast<double>(dims[2] - 1)));
+  const Vec3 origin{std::round(centre[0]), std::round(centre[1]), std::round(centre[2])};
+  const Eigen::Vector3d shift(origin[0], origin[1], origin[2]);
+  for (ImageGeometry* g : {&grid.occupancy.geometry, &grid.fraction.geometry, &grid.label.geometry, &grid.mask.geometry}) {
+    g->origin -= shift;
+  }
   std::optional<SpringGridModel> grid_model;
   std::optional<TetMesh> tetmesh;
   Model model;
@@ -145,6 +160,7 @@ Trajectory run_scenario(const Scenario& s, RunReport* report_out, const std::fun
     }
   } else {
     tetmesh = read_tet_mesh_file(s.tetmesh);
+    for (size_t i = 0; i < tetmesh->nodes.size(); ++i) tetmesh->nodes[i] -= origin[i % 3];
     model = calibrated_tet_spring_model(*tetmesh, s.material);
   }
   const auto& rest = std::visit([](const auto& m) -> const std::vector<Real>& { return m.rest_positions; }, model);
@@ -165,9 +181,19 @@ Trajectory run_scenario(const Scenario& s, RunReport* report_out, const std::fun
     const auto& f = s.fixed[r];
     std::vector<int32_t> ids;
     switch (f.kind) {
-      case FixedRegionSpec::Kind::box: ids = particles_in_box(rest, f.box); break;
+      case FixedRegionSpec::Kind::box: {
+        Box local = f.box;
+        for (size_t c = 0; c < 3; ++c) local.min[c] -= origin[c], local.max[c] -= origin[c];
+        ids = particles_in_box(rest, local);
+        break;
+      }
       case FixedRegionSpec::Kind::box_fraction: ids = particles_in_box(rest, {bounds.at(f.box.min), bounds.at(f.box.max)}); break;
-      case FixedRegionSpec::Kind::half_space: ids = particles_in_half_space(rest, f.half_space); break;
+      case FixedRegionSpec::Kind::half_space: {
+        HalfSpace local = f.half_space;
+        for (size_t c = 0; c < 3; ++c) local.point[c] -= origin[c];
+        ids = particles_in_half_space(rest, local);
+        break;
+      }
       case FixedRegionSpec::Kind::label:
         if (grid_model) {
           ids = particles_with_label(*grid_model, grid.label, f.label);
@@ -190,11 +216,17 @@ Trajectory run_scenario(const Scenario& s, RunReport* report_out, const std::fun
 
   // The surface and its coupling.
   SurfaceMesh surface;
+  std::vector<float> lps_rest_vertices;
   SurfaceCoupling coupling;
   std::vector<uint32_t> triangles;
   const bool has_surface = !s.surface.empty();
   if (has_surface) {
     surface = read_surface_mesh_file(s.surface);
+    lps_rest_vertices = surface.vertices;
+    surface.lattice.origin -= shift;
+    for (size_t i = 0; i < surface.vertices.size(); ++i) {
+      surface.vertices[i] = static_cast<float>(static_cast<double>(surface.vertices[i]) - origin[i % 3]);
+    }
     if (grid_model) {
       coupling = couple_surface(surface, *grid_model, s.coupling);
     } else {
@@ -224,7 +256,7 @@ Trajectory run_scenario(const Scenario& s, RunReport* report_out, const std::fun
     ToolState ts;
     ts.spec = &t;
     std::string note;
-    ts.path = resolve_path(t, bounds, rest, &note);
+    ts.path = resolve_path(t, bounds, rest, origin, &note);
     if (!note.empty()) report.notes.push_back(note);
     tools.push_back(std::move(ts));
   }
@@ -252,12 +284,17 @@ Trajectory run_scenario(const Scenario& s, RunReport* report_out, const std::fun
   if (has_surface) {
     traj.surface_file = s.surface.string();
     traj.surface_sha256 = sha256_file(s.surface);
-    traj.rest_vertices = surface.vertices;
+    traj.rest_vertices = lps_rest_vertices;
   } else {
     // No surface: the particles stand in for it as a point set (no triangles).
-    traj.rest_vertices.assign(rest.begin(), rest.end());
+    traj.rest_vertices.resize(rest.size());
+    for (size_t i = 0; i < rest.size(); ++i) traj.rest_vertices[i] = static_cast<float>(rest[i] + origin[i % 3]);
   }
-  if (s.write_particles) traj.rest_particles.assign(rest.begin(), rest.end());
+  if (s.write_particles) {
+    traj.rest_particles.resize(rest.size());
+    for (size_t i = 0; i < rest.size(); ++i) traj.rest_particles[i] = static_cast<float>(rest[i] + origin[i % 3]);
+  }
+  const std::vector<float>& local_rest_vertices = has_surface ? surface.vertices : traj.rest_vertices;
   std::vector<TrajectoryMetric> metrics = {{"kinetic_energy", "nJ", {}},  {"elastic_energy", "nJ", {}},
                                            {"max_displacement", "mm", {}}, {"surface_max_displacement", "mm", {}},
                                            {"enclosed_volume", "mm^3", {}}, {"springs_cut", "1", {}},
@@ -277,14 +314,14 @@ Trajectory run_scenario(const Scenario& s, RunReport* report_out, const std::fun
       }
     }
     traj.time.push_back(t);
-    traj.vertices.insert(traj.vertices.end(), vertices.begin(), vertices.end());
+    for (size_t i = 0; i < vertices.size(); ++i) traj.vertices.push_back(static_cast<float>(vertices[i] + origin[i % 3]));
     if (traj.topologies.empty() || traj.topologies.back() != triangles) traj.topologies.push_back(triangles);
     traj.topology_of_frame.push_back(static_cast<int32_t>(traj.topologies.size() - 1));
     if (s.write_particles) {
       for (int64_t i = 0; i < np; ++i) {
-        traj.particles.push_back(state.x[static_cast<size_t>(i)]);
-        traj.particles.push_back(state.y[static_cast<size_t>(i)]);
-        traj.particles.push_back(state.z[static_cast<size_t>(i)]);
+        traj.particles.push_back(static_cast<float>(state.x[static_cast<size_t>(i)] + origin[0]));
+        traj.particles.push_back(static_cast<float>(state.y[static_cast<size_t>(i)] + origin[1]));
+        traj.particles.push_back(static_cast<float>(state.z[static_cast<size_t>(i)] + origin[2]));
       }
     }
     double max_disp = 0, surf_disp = 0;
@@ -296,7 +333,7 @@ Trajectory run_scenario(const Scenario& s, RunReport* report_out, const std::fun
     }
     for (size_t i = 0; i < vertices.size(); i += 3) {
       double d = 0;
-      for (size_t c = 0; c < 3; ++c) d += std::pow(double(vertices[i + c]) - traj.rest_vertices[i + c], 2);
+      for (size_t c = 0; c < 3; ++c) d += std::pow(double(vertices[i + c]) - local_rest_vertices[i + c], 2);
       surf_disp = std::max(surf_disp, d);
     }
     metrics[0].values.push_back(kinetic_energy(state, dt));
@@ -308,13 +345,13 @@ Trajectory run_scenario(const Scenario& s, RunReport* report_out, const std::fun
     metrics[6].values.push_back(dt);
     for (const auto& ts : tools) {
       if (ts.spec->kind == ToolAction::Kind::cut) continue;
-      const Vec3 c = ts.path.at(t);
+      const Vec3 l = ts.path.at(t), c{l[0] + origin[0], l[1] + origin[1], l[2] + origin[2]};
       const bool on = ts.active(t) && (ts.spec->kind == ToolAction::Kind::probe || ts.grab.has_value());
       traj.spheres.insert(traj.spheres.end(), {c[0], c[1], c[2], on ? ts.spec->radius_mm : 0.0});
     }
     for (const auto& ts : tools) {
       if (ts.spec->kind != ToolAction::Kind::cut) continue;
-      const Vec3 c = ts.path.at(t);
+      const Vec3 l = ts.path.at(t), c{l[0] + origin[0], l[1] + origin[1], l[2] + origin[2]};
       const auto& e = ts.spec->blade_edge_mm;
       traj.blades.insert(traj.blades.end(), {c[0] - e[0] / 2, c[1] - e[1] / 2, c[2] - e[2] / 2, c[0] + e[0] / 2,
                                              c[1] + e[1] / 2, c[2] + e[2] / 2, ts.active(t) ? 1.0 : 0.0});
@@ -377,8 +414,8 @@ Trajectory run_scenario(const Scenario& s, RunReport* report_out, const std::fun
           ts.grab = grab_particles_in_sphere(state, {c, spec.radius_mm}, backend, s.threads);
           if (ts.grab->particles.empty()) {
             throw InputError(sfile, spec.label, "grabs no particle at t = " + std::to_string(t_next) + " s (sphere of radius " +
-                                                    std::to_string(spec.radius_mm) + " mm at (" + std::to_string(c[0]) + ", " +
-                                                    std::to_string(c[1]) + ", " + std::to_string(c[2]) +
+                                                    std::to_string(spec.radius_mm) + " mm at (" + std::to_string(c[0] + origin[0]) + ", " +
+                                                    std::to_string(c[1] + origin[1]) + ", " + std::to_string(c[2] + origin[2]) +
                                                     ") LPS mm); move it onto the tissue or set snap_to_tissue: true");
           }
           report.notes.push_back(spec.label + ": grabbed " + std::to_string(ts.grab->particles.size()) + " particles at t = " +
