@@ -2,6 +2,7 @@
 
 #include "ctsurg/core/error.h"
 
+#include <nlohmann/json.hpp>
 #include <yaml-cpp/yaml.h>
 
 #include <cmath>
@@ -155,21 +156,28 @@ ToolAction tool_of(const Field& item) {
   int kinds = 0;
   ToolAction t;
   std::string key;
-  for (const char* k : {"grab", "probe", "cut"}) {
+  for (const char* k : {"grab", "probe", "cut", "force"}) {
     if (item.has(k)) {
       ++kinds;
       key = k;
     }
   }
-  item.only({"grab", "probe", "cut"});
-  if (kinds != 1) item.fail("each tool is exactly one of grab:, probe:, cut:");
+  item.only({"grab", "probe", "cut", "force"});
+  if (kinds != 1) item.fail("each tool is exactly one of grab:, probe:, cut:, force:");
   const Field f = item.child(key);
-  t.kind = key == "grab" ? ToolAction::Kind::grab : key == "probe" ? ToolAction::Kind::probe : ToolAction::Kind::cut;
+  t.kind = key == "grab"    ? ToolAction::Kind::grab
+           : key == "probe" ? ToolAction::Kind::probe
+           : key == "cut"   ? ToolAction::Kind::cut
+                            : ToolAction::Kind::force;
   t.label = item.path() + " (" + key + ")";
   if (t.kind == ToolAction::Kind::cut) {
     f.only({"start_s", "end_s", "path", "blade_edge_mm", "snap_to_tissue"});
     t.blade_edge_mm = f.child("blade_edge_mm").vec3();
     if (t.blade_edge_mm == std::array<double, 3>{0, 0, 0}) f.child("blade_edge_mm").fail("the blade edge must not be zero");
+  } else if (t.kind == ToolAction::Kind::force) {
+    f.only({"start_s", "end_s", "path", "radius_mm", "force_n", "snap_to_tissue"});
+    t.radius_mm = f.child("radius_mm").positive();
+    t.force_n = f.child("force_n").vec3();
   } else {
     f.only({"start_s", "end_s", "path", "radius_mm", "snap_to_tissue"});
     t.radius_mm = f.child("radius_mm").positive();
@@ -232,9 +240,40 @@ FixedRegionSpec fixed_of(const Field& item) {
 
 }  // namespace
 
-const char* to_string(ModelKind kind) { return kind == ModelKind::spring_grid ? "spring_grid" : "explicit_springs"; }
+const char* to_string(ModelKind kind) {
+  return kind == ModelKind::spring_grid ? "spring_grid" : kind == ModelKind::fem ? "fem" : "explicit_springs";
+}
+const char* to_string(FemLaw law) { return law == FemLaw::linear ? "linear" : law == FemLaw::stvk ? "stvk" : "neo_hookean"; }
+
+std::string describe_scenario(const Scenario& s) {
+  nlohmann::json j;
+  j["name"] = s.name;
+  j["model"] = to_string(s.model);
+  if (s.model == ModelKind::fem) {
+    j["material_law"] = to_string(s.fem_law);
+    j["solver"] = s.fem_solver == FemSolver::dynamic ? "dynamic" : "static";
+  }
+  // The inputs the run reads: a grid unless the model is FEM (or explicit springs from a tet mesh),
+  // a tet mesh for FEM and tet-mesh springs, the surface when one is named.
+  nlohmann::json inputs = nlohmann::json::object();
+  const bool grid_used = s.model == ModelKind::spring_grid || (s.model == ModelKind::explicit_springs && s.springs_from == SpringSource::grid);
+  if (grid_used || !s.grid.empty()) inputs["grid"] = s.grid.string();
+  if (s.model == ModelKind::fem || (s.model == ModelKind::explicit_springs && s.springs_from == SpringSource::tetmesh)) {
+    inputs["tetmesh"] = s.tetmesh.string();
+  }
+  if (!s.surface.empty()) inputs["surface"] = s.surface.string();
+  j["inputs"] = inputs;
+  j["trajectory"] = s.trajectory.string();
+  nlohmann::json render = nlohmann::json::array();
+  for (const auto& r : s.render) {
+    render.push_back({{"name", r.name}, {"layout", r.layout}, {"frames", r.frames}, {"view", r.view}, {"size", r.size},
+                      {"reference", r.reference}});
+  }
+  j["render"] = render;
+  return j.dump(2);
+}
 const char* to_string(ToolAction::Kind kind) {
-  return kind == ToolAction::Kind::grab ? "grab" : kind == ToolAction::Kind::probe ? "probe" : "cut";
+  return kind == ToolAction::Kind::grab ? "grab" : kind == ToolAction::Kind::probe ? "probe" : kind == ToolAction::Kind::cut ? "cut" : "force";
 }
 
 Scenario parse_scenario(const std::string& text, const fs::path& file, const fs::path& base_dir) {
@@ -248,17 +287,28 @@ Scenario parse_scenario(const std::string& text, const fs::path& file, const fs:
   const Field top(doc, "", &name);
   if (!top.is_map()) top.fail("a scenario is a map of sections (name, model, material, time, output, ...)");
   top.only({"ctsurg_scenario", "name", "model", "material", "gravity_mm_per_s2", "fixed", "tools", "time", "output",
-            "backend", "threads"});
+            "render", "backend", "threads"});
   Scenario s;
   s.file = file;
   if (top.child("ctsurg_scenario").integer(1, 1000) != 1) top.child("ctsurg_scenario").fail("this ctsurg reads version 1");
   s.name = top.has("name") ? top.child("name").text() : file.stem().string();
 
   const Field m = top.child("model");
-  m.only({"kind", "grid", "surface", "tetmesh", "springs_from", "coupling", "mass_from_fraction"});
-  s.model = m.child("kind").one_of({"spring_grid", "explicit_springs"}) == std::string("spring_grid") ? ModelKind::spring_grid
-                                                                                                      : ModelKind::explicit_springs;
-  s.grid = resolve(base_dir, m.child("grid").text());
+  m.only({"kind", "grid", "surface", "tetmesh", "springs_from", "coupling", "mass_from_fraction", "material_law", "solver"});
+  const std::string kind = m.child("kind").one_of({"spring_grid", "explicit_springs", "fem"});
+  s.model = kind == "spring_grid" ? ModelKind::spring_grid : kind == "fem" ? ModelKind::fem : ModelKind::explicit_springs;
+  if (s.model != ModelKind::fem || m.has("grid")) s.grid = resolve(base_dir, m.child("grid").text());
+  if (m.has("material_law") || m.has("solver")) {
+    if (s.model != ModelKind::fem) m.child(m.has("solver") ? "solver" : "material_law").fail("only for kind: fem");
+  }
+  if (m.has("material_law")) {
+    const std::string law = m.child("material_law").one_of({"linear", "stvk", "neo_hookean"});
+    s.fem_law = law == "linear" ? FemLaw::linear : law == "stvk" ? FemLaw::stvk : FemLaw::neo_hookean;
+  }
+  if (m.has("solver")) {
+    s.fem_solver = m.child("solver").one_of({"dynamic", "static"}) == std::string("static") ? FemSolver::static_equilibrium
+                                                                                             : FemSolver::dynamic;
+  }
   if (m.has("surface")) s.surface = resolve(base_dir, m.child("surface").text());
   if (m.has("springs_from")) {
     if (s.model != ModelKind::explicit_springs) m.child("springs_from").fail("only for kind: explicit_springs");
@@ -267,6 +317,7 @@ Scenario parse_scenario(const std::string& text, const fs::path& file, const fs:
   }
   if (m.has("tetmesh")) s.tetmesh = resolve(base_dir, m.child("tetmesh").text());
   if (s.springs_from == SpringSource::tetmesh && s.tetmesh.empty()) m.child("tetmesh").fail("missing (springs_from: tetmesh)");
+  if (s.model == ModelKind::fem && s.tetmesh.empty()) throw InputError(name, "model.tetmesh", "missing (kind: fem needs a tet mesh)");
   if (m.has("coupling")) {
     s.coupling = m.child("coupling").one_of({"trilinear", "nearest_particle"}) == std::string("trilinear")
                      ? CouplingMode::trilinear
@@ -294,7 +345,18 @@ Scenario parse_scenario(const std::string& text, const fs::path& file, const fs:
     for (const auto& item : top.child("fixed").items()) s.fixed.push_back(fixed_of(item));
   }
   if (top.has("tools")) {
-    for (const auto& item : top.child("tools").items()) s.tools.push_back(tool_of(item));
+    for (const auto& item : top.child("tools").items()) {
+      s.tools.push_back(tool_of(item));
+      // FEM tools: grab (prescribed displacements) and probe (sphere contact, dynamic only); cutting
+      // a tet mesh is not implemented (the spring models cut).
+      if (s.model == ModelKind::fem && s.tools.back().kind == ToolAction::Kind::cut) {
+        item.fail("cut needs a spring model (kind: spring_grid or explicit_springs); the FEM models do not cut");
+      }
+      if (s.model == ModelKind::fem && s.fem_solver == FemSolver::static_equilibrium &&
+          s.tools.back().kind == ToolAction::Kind::probe) {
+        item.fail("probe needs solver: dynamic (contact is not part of the static solver)");
+      }
+    }
   }
 
   const Field t = top.child("time");
@@ -327,6 +389,26 @@ Scenario parse_scenario(const std::string& text, const fs::path& file, const fs:
   s.frame_interval_s = o.has("frame_interval_s") ? o.child("frame_interval_s").positive() : s.duration_s / 50;
   if (s.frame_interval_s > s.duration_s) o.child("frame_interval_s").fail("longer than the run");
   if (o.has("particles")) s.write_particles = o.child("particles").boolean();
+  if (top.has("render")) {
+    for (const auto& item : top.child("render").items()) {
+      item.only({"name", "layout", "frames", "view", "size", "reference"});
+      RenderRequest r;
+      r.name = item.child("name").text();
+      if (r.name.empty() || r.name.find_first_not_of("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789_-") !=
+                                std::string::npos) {
+        item.child("name").fail("use letters, digits, '_' and '-' only (it names a file)");
+      }
+      for (const auto& other : s.render) {
+        if (other.name == r.name) item.child("name").fail("'" + r.name + "' is used twice");
+      }
+      if (item.has("layout")) r.layout = item.child("layout").one_of({"single", "side-by-side", "overlay", "heat-map"});
+      if (item.has("frames")) r.frames = item.child("frames").text();
+      if (item.has("view")) r.view = item.child("view").text();
+      if (item.has("size")) r.size = static_cast<int>(item.child("size").integer(16, 8192));
+      if (item.has("reference")) r.reference = item.child("reference").text();
+      s.render.push_back(r);
+    }
+  }
   if (top.has("backend")) s.backend = top.child("backend").one_of({"cpu", "cuda", "auto"});
   if (top.has("threads")) s.threads = static_cast<int>(top.child("threads").integer(0, 1024));
   return s;

@@ -15,6 +15,7 @@
 #include "ctsurg/sim/surface_coupling.h"
 #include "ctsurg/sim/surface_cutting.h"
 #include "ctsurg/sim/tet_embedding.h"
+#include "scenario_support.h"
 
 #include <algorithm>
 #include <chrono>
@@ -27,76 +28,14 @@ namespace ctsurg::sim {
 
 namespace {
 
-using Vec3 = std::array<double, 3>;
+using namespace detail;
 using Model = std::variant<SpringGridModel, ExplicitSpringModel>;
-
-struct Bounds {
-  Vec3 lo{1e300, 1e300, 1e300}, hi{-1e300, -1e300, -1e300};
-  Vec3 at(const Vec3& f) const {
-    return {lo[0] + f[0] * (hi[0] - lo[0]), lo[1] + f[1] * (hi[1] - lo[1]), lo[2] + f[2] * (hi[2] - lo[2])};
-  }
-};
-
-Bounds bounds_of(const std::vector<Real>& p) {
-  Bounds b;
-  for (size_t i = 0; i < p.size(); i += 3) {
-    for (size_t c = 0; c < 3; ++c) {
-      b.lo[c] = std::min<double>(b.lo[c], p[i + c]);
-      b.hi[c] = std::max<double>(b.hi[c], p[i + c]);
-    }
-  }
-  return b;
-}
-
-// A tool's path resolved to LPS mm keyframes; position(t) is piecewise linear, constant outside.
-struct ResolvedPath {
-  std::vector<double> t;
-  std::vector<Vec3> p;
-  Vec3 at(double time) const {
-    if (time <= t.front()) return p.front();
-    if (time >= t.back()) return p.back();
-    const size_t k = static_cast<size_t>(std::upper_bound(t.begin(), t.end(), time) - t.begin());
-    const double a = (time - t[k - 1]) / (t[k] - t[k - 1]);
-    return {p[k - 1][0] + a * (p[k][0] - p[k - 1][0]), p[k - 1][1] + a * (p[k][1] - p[k - 1][1]),
-            p[k - 1][2] + a * (p[k][2] - p[k - 1][2])};
-  }
-};
-
-// In the simulation's frame: LPS minus `origin` (see run_scenario).
-ResolvedPath resolve_path(const ToolAction& tool, const Bounds& bounds, const std::vector<Real>& rest, const Vec3& origin,
-                          std::string* note) {
-  ResolvedPath r;
-  for (const auto& k : tool.path) {
-    Vec3 p = k.point.value;
-    if (k.point.kind == PointSpec::Kind::position_mm) p = {p[0] - origin[0], p[1] - origin[1], p[2] - origin[2]};
-    if (k.point.kind == PointSpec::Kind::at_fraction) p = bounds.at(p);
-    if (k.point.kind == PointSpec::Kind::offset_mm) p = {r.p.front()[0] + p[0], r.p.front()[1] + p[1], r.p.front()[2] + p[2]};
-    r.t.push_back(k.t);
-    r.p.push_back(p);
-  }
-  if (tool.snap_to_tissue) {
-    // The nearest rest particle to the first keyframe (lowest id on ties): the whole path moves by the
-    // difference, so the tool starts on tissue whatever the bounding box looks like.
-    double best = 1e300;
-    size_t bi = 0;
-    for (size_t i = 0; i < rest.size(); i += 3) {
-      const double d = std::pow(rest[i] - r.p[0][0], 2) + std::pow(rest[i + 1] - r.p[0][1], 2) + std::pow(rest[i + 2] - r.p[0][2], 2);
-      if (d < best) {
-        best = d;
-        bi = i;
-      }
-    }
-    const Vec3 shift{rest[bi] - r.p[0][0], rest[bi + 1] - r.p[0][1], rest[bi + 2] - r.p[0][2]};
-    for (auto& p : r.p) p = {p[0] + shift[0], p[1] + shift[1], p[2] + shift[2]};
-    *note = tool.label + ": path snapped to tissue by " + std::to_string(std::sqrt(best)) + " mm";
-  }
-  return r;
-}
 
 struct ToolState {
   const ToolAction* spec = nullptr;
   ResolvedPath path;
   std::optional<Grab> grab;  // captured particles while grabbing
+  std::vector<int32_t> loaded;  // force: the particles sharing the force (captured at start)
   bool released = false;
   std::optional<double> cut_from;  // cut: the time the blade's current sweep started
   bool active(double t) const { return t >= spec->start_s - 1e-12 && t < spec->end_s; }
@@ -114,21 +53,10 @@ struct Checkpoint {
   size_t frames = 0;
 };
 
-double enclosed_volume(const std::vector<float>& v, const std::vector<uint32_t>& tri) {
-  double vol = 0;
-  for (size_t f = 0; f < tri.size(); f += 3) {
-    const float* a = &v[3 * tri[f]];
-    const float* b = &v[3 * tri[f + 1]];
-    const float* c = &v[3 * tri[f + 2]];
-    vol += (double(a[0]) * (double(b[1]) * c[2] - double(b[2]) * c[1]) - double(a[1]) * (double(b[0]) * c[2] - double(b[2]) * c[0]) +
-            double(a[2]) * (double(b[0]) * c[1] - double(b[1]) * c[0])) / 6.0;
-  }
-  return vol;
-}
-
 }  // namespace
 
 Trajectory run_scenario(const Scenario& s, RunReport* report_out, const std::function<void(double)>& progress) {
+  if (s.model == ModelKind::fem) return run_fem_scenario(s, report_out, progress);
   RunReport report;
   const std::string sfile = s.file.string();
   const Backend backend = s.backend == "cuda" ? Backend::cuda : Backend::cpu;  // auto: cpu unless CUDA is built
@@ -297,7 +225,8 @@ Trajectory run_scenario(const Scenario& s, RunReport* report_out, const std::fun
   const std::vector<float>& local_rest_vertices = has_surface ? surface.vertices : traj.rest_vertices;
   std::vector<TrajectoryMetric> metrics = {{"kinetic_energy", "nJ", {}},  {"elastic_energy", "nJ", {}},
                                            {"max_displacement", "mm", {}}, {"surface_max_displacement", "mm", {}},
-                                           {"enclosed_volume", "mm^3", {}}, {"springs_cut", "1", {}},
+                                           {"enclosed_volume", "mm^3", {}}, {"surface_area", "mm^2", {}},
+                                           {"springs_cut", "1", {}},
                                            {"dt", "s", {}}};
   std::vector<float> vertices;
   int64_t springs_cut = 0, triangles_removed = 0, steps = 0;
@@ -341,12 +270,13 @@ Trajectory run_scenario(const Scenario& s, RunReport* report_out, const std::fun
     metrics[2].values.push_back(std::sqrt(max_disp));
     metrics[3].values.push_back(std::sqrt(surf_disp));
     metrics[4].values.push_back(has_surface ? enclosed_volume(vertices, triangles) : 0.0);
-    metrics[5].values.push_back(static_cast<double>(springs_cut));
-    metrics[6].values.push_back(dt);
+    metrics[5].values.push_back(has_surface ? surface_area(vertices, triangles) : 0.0);
+    metrics[6].values.push_back(static_cast<double>(springs_cut));
+    metrics[7].values.push_back(dt);
     for (const auto& ts : tools) {
       if (ts.spec->kind == ToolAction::Kind::cut) continue;
       const Vec3 l = ts.path.at(t), c{l[0] + origin[0], l[1] + origin[1], l[2] + origin[2]};
-      const bool on = ts.active(t) && (ts.spec->kind == ToolAction::Kind::probe || ts.grab.has_value());
+      const bool on = ts.active(t) && (ts.spec->kind == ToolAction::Kind::probe || ts.grab.has_value() || !ts.loaded.empty());
       traj.spheres.insert(traj.spheres.end(), {c[0], c[1], c[2], on ? ts.spec->radius_mm : 0.0});
     }
     for (const auto& ts : tools) {
@@ -430,6 +360,35 @@ Trajectory run_scenario(const Scenario& s, RunReport* report_out, const std::fun
           apply_grab(state, *ts.grab, c, backend, s.threads);
           tool_work = true;
         }
+      } else if (spec.kind == ToolAction::Kind::force) {
+        // An external force F shared by n free particles adds (F / n) / m dt^2 to each one's Verlet
+        // update: applied after the step, as the papers apply the tools, it is the same update as a
+        // force inside the step (x_next = ... + (f + F / n) / m dt^2).
+        if (ts.loaded.empty() && !ts.released && ts.active(t_next)) {
+          const Grab inside = grab_particles_in_sphere(state, {c, spec.radius_mm}, backend, s.threads);
+          for (const int32_t i : inside.particles) {
+            if (state.inv_mass[static_cast<size_t>(i)] > 0) ts.loaded.push_back(i);
+          }
+          if (ts.loaded.empty()) {
+            throw InputError(sfile, spec.label, "the force's sphere holds no free particle at t = " + std::to_string(t_next) +
+                                                    " s; move it onto the tissue or set snap_to_tissue: true");
+          }
+          report.notes.push_back(spec.label + ": force shared by " + std::to_string(ts.loaded.size()) + " particles");
+        }
+        if (!ts.loaded.empty() && !ts.active(t_next)) {
+          ts.loaded.clear();
+          ts.released = true;
+          tool_work = true;
+        }
+        const double n = static_cast<double>(ts.loaded.size());
+        for (const int32_t i : ts.loaded) {
+          const size_t k = static_cast<size_t>(i);
+          const double a = 1e6 / n * state.inv_mass[k] * dt * dt;  // N -> uN = g mm/s^2
+          state.x[k] += static_cast<Real>(spec.force_n[0] * a);
+          state.y[k] += static_cast<Real>(spec.force_n[1] * a);
+          state.z[k] += static_cast<Real>(spec.force_n[2] * a);
+        }
+        tool_work |= !ts.loaded.empty();
       } else if (spec.kind == ToolAction::Kind::probe) {
         if (ts.active(t_next)) tool_work |= probe_sphere(state, {c, spec.radius_mm}, backend, s.threads) > 0;
       } else {

@@ -13,6 +13,7 @@
 
 #include <spdlog/spdlog.h>
 
+#include <cstdio>
 #include <memory>
 
 namespace fs = std::filesystem;
@@ -20,6 +21,7 @@ namespace fs = std::filesystem;
 int main(int argc, char** argv) {
   std::string scenario_path, output, grid, surface, tetmesh, backend;
   int threads = -1;
+  bool describe = false;
   return ctsurg::run_tool(
       argc, argv, "ctsurg-sim",
       "Runs a scenario file (YAML or JSON): a spring-mass model of the tissue (implicit 18-neighbour grid or "
@@ -33,6 +35,9 @@ int main(int argc, char** argv) {
         app.add_option("--surface", surface, "Surface file (overrides model.surface)");
         app.add_option("--tetmesh", tetmesh, "Tet mesh file (overrides model.tetmesh)");
         app.add_option("--backend", backend, "cpu, cuda or auto (overrides backend)")->check(CLI::IsMember({"cpu", "cuda", "auto"}));
+        app.add_flag("--describe", describe,
+                     "Print what the scenario reads and writes (model, input files, trajectory, render requests) as JSON "
+                     "and exit without running; for the pipeline (scripts/Makefile)");
         app.add_option("--threads", threads, "CPU threads, 0 = automatic (overrides threads)")->check(CLI::Range(0, 1024));
       },
       [&](const ctsurg::ToolContext& ctx) {
@@ -43,6 +48,10 @@ int main(int argc, char** argv) {
         if (!tetmesh.empty()) s.tetmesh = tetmesh;
         if (!backend.empty()) s.backend = backend;
         if (threads >= 0) s.threads = threads;
+        if (describe) {
+          std::printf("%s\n", ctsurg::sim::describe_scenario(s).c_str());
+          return;
+        }
         if (s.trajectory.extension() != ".h5") {
           throw ctsurg::InputError(s.trajectory.string(), "output.trajectory", "the trajectory is an HDF5 file: name it *.h5");
         }
@@ -68,9 +77,10 @@ int main(int argc, char** argv) {
         }
         ctsurg::Provenance provenance{ctx.name, ctsurg::kVersion, ctx.command_line, {}, nlohmann::json::array()};
         provenance.add_input(scenario_path);
-        provenance.add_input(s.grid);
+        if (!s.grid.empty()) provenance.add_input(s.grid);
         if (!s.surface.empty()) provenance.add_input(s.surface);
-        if (s.model == ctsurg::sim::ModelKind::explicit_springs && s.springs_from == ctsurg::sim::SpringSource::tetmesh) {
+        if (s.model == ctsurg::sim::ModelKind::fem ||
+            (s.model == ctsurg::sim::ModelKind::explicit_springs && s.springs_from == ctsurg::sim::SpringSource::tetmesh)) {
           provenance.add_input(s.tetmesh);
         }
         ctsurg::write_trajectory_file(s.trajectory, traj, provenance);

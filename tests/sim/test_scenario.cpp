@@ -162,3 +162,44 @@ TEST(Scenario, UnreadableFileIsNamed) {
     EXPECT_NE(std::string(e.what()).find("/nonexistent/s.yaml"), std::string::npos);
   }
 }
+
+TEST(Scenario, FemKindsAndTheirRules) {
+  const std::string base =
+      "ctsurg_scenario: 1\nmodel:\n  kind: fem\n  tetmesh: t.h5\n  material_law: stvk\n  solver: static\n"
+      "material: {preset: kidney}\ntime: {duration_s: 1}\noutput: {trajectory: o.h5}\n";
+  const auto s = parse_scenario(base, "f.yaml", "/b");
+  EXPECT_EQ(s.model, ctsurg::sim::ModelKind::fem);
+  EXPECT_EQ(s.fem_law, ctsurg::sim::FemLaw::stvk);
+  EXPECT_EQ(s.fem_solver, ctsurg::sim::FemSolver::static_equilibrium);
+  EXPECT_TRUE(s.grid.empty());  // no grid for an FEM scene
+  const auto describe = ctsurg::sim::describe_scenario(s);
+  EXPECT_NE(describe.find("\"tetmesh\": \"/b/t.h5\""), std::string::npos) << describe;
+  EXPECT_EQ(describe.find("\"grid\""), std::string::npos) << describe;
+  const auto error = [&](const std::string& text) {
+    try {
+      (void)parse_scenario(text, "f.yaml", "/b");
+    } catch (const ctsurg::InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("(accepted)");
+  };
+  EXPECT_NE(error(base + "tools:\n  - cut: {blade_edge_mm: [0, 0, 1], path: [{t: 0, position_mm: [0, 0, 0]}]}\n")
+                .find("f.yaml: tools[0]: cut needs a spring model"),
+            std::string::npos);
+  EXPECT_NE(error(base + "tools:\n  - probe: {radius_mm: 2, path: [{t: 0, position_mm: [0, 0, 0]}]}\n").find("probe needs solver: dynamic"),
+            std::string::npos);
+  EXPECT_NE(error(replaced(base, "  tetmesh: t.h5\n", "")).find("model.tetmesh: missing (kind: fem needs a tet mesh)"), std::string::npos);
+  EXPECT_NE(error(replaced(base, "kind: fem", "kind: spring_grid\n  grid: g.h5")).find("model.solver: only for kind: fem"),
+            std::string::npos);
+}
+
+TEST(Scenario, RenderRequestsAreChecked) {
+  const std::string base = std::string(kFull) + "render:\n  - {name: a, layout: heat-map, frames: \"10\", size: 256}\n";
+  const auto s = parse_scenario(base, "s.yaml", "/base");
+  ASSERT_EQ(s.render.size(), 1u);
+  EXPECT_EQ(s.render[0].layout, "heat-map");
+  EXPECT_EQ(s.render[0].size, 256);
+  EXPECT_NE(error_of(base + "  - {name: a}\n").find("render[1].name: 'a' is used twice"), std::string::npos);
+  EXPECT_NE(error_of(base + "  - {name: a/b}\n").find("render[1].name: use letters"), std::string::npos);
+  EXPECT_NE(error_of(base + "  - {name: b, layout: mosaic}\n").find("render[1].layout: 'mosaic' is not one of"), std::string::npos);
+}

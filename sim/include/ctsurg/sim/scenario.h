@@ -19,7 +19,9 @@
 
 namespace ctsurg::sim {
 
-enum class ModelKind { spring_grid, explicit_springs };
+enum class ModelKind { spring_grid, explicit_springs, fem };
+enum class FemLaw { linear, stvk, neo_hookean };  // fem: the material law (fem_material.h)
+enum class FemSolver { dynamic, static_equilibrium };  // fem: explicit dynamics or static Newton per frame
 enum class SpringSource { grid, tetmesh };  // where explicit springs come from
 
 // A point given in one of three ways; resolved to LPS mm when the run starts (tool_path.h).
@@ -37,15 +39,29 @@ struct Keyframe {
 };
 
 struct ToolAction {
-  enum class Kind { grab, probe, cut };
+  enum class Kind { grab, probe, cut, force };
   Kind kind = Kind::grab;
   std::string label;                 // "tools[0] (grab)", for messages
   double start_s = 0;                // active from start_s ...
   double end_s = 0;                  // ... to end_s (grab: release), s; +inf = to the end of the run
-  double radius_mm = 0;              // grab, probe: sphere radius, mm (> 0)
+  double radius_mm = 0;              // grab, probe, force: sphere radius, mm (> 0)
   std::vector<Keyframe> path;        // >= 1 keyframe, increasing t; the tool moves linearly between them
   bool snap_to_tissue = false;       // shift the whole path so its first point is on the nearest particle
   std::array<double, 3> blade_edge_mm{0, 0, 0};  // cut: the blade's edge, centred on the path (mm, != 0)
+  // force: a total force (N, LPS) shared equally by the particles or nodes inside the sphere at
+  // start_s (a point load: the FEM paper's experiment), applied until end_s.
+  std::array<double, 3> force_n{0, 0, 0};
+};
+
+// A picture the pipeline makes from the trajectory with ctsurg-render (scripts/Makefile); ctsurg-sim
+// only checks and lists them (ctsurg-sim --describe).
+struct RenderRequest {
+  std::string name;                 // the picture's file stem, e.g. "grab_heat" -> grab_heat.png ([A-Za-z0-9_-]+)
+  std::string layout = "single";    // single | side-by-side | overlay | heat-map
+  std::string frames = "last";      // ctsurg-render --frames: rest, last, all, N, A:B, A:B:STEP
+  std::string view = "anterior";    // anterior, posterior, left, right, superior, inferior, or "AZ,EL"
+  int size = 768;                   // pixels (square)
+  std::string reference;            // comparisons: empty = the rest surface, or another scenario's name
 };
 
 struct FixedRegionSpec {
@@ -61,10 +77,12 @@ struct Scenario {
   std::string name;
   ModelKind model = ModelKind::spring_grid;
   SpringSource springs_from = SpringSource::grid;
-  std::filesystem::path grid;       // occupancy grid file (ctsurg-grid); required
+  std::filesystem::path grid;       // occupancy grid file (ctsurg-grid); required except for kind: fem
   std::filesystem::path surface;    // surface file (ctsurg-surface/-normalmap) on that grid; optional
-  std::filesystem::path tetmesh;    // tet mesh file (springs_from: tetmesh)
+  std::filesystem::path tetmesh;    // tet mesh file (ctsurg-tetmesh): kind fem, or springs_from: tetmesh
   CouplingMode coupling = CouplingMode::trilinear;
+  FemLaw fem_law = FemLaw::neo_hookean;         // kind: fem
+  FemSolver fem_solver = FemSolver::dynamic;    // kind: fem
   bool mass_from_fraction = false;
   Material material;                // preset, possibly with explicit overrides
   double damping_per_s = 0;         // mass-proportional damping rate alpha, 1/s (Verlet factor alpha dt)
@@ -78,6 +96,7 @@ struct Scenario {
   double frame_interval_s = 0;      // output frame every ...; > 0
   bool write_particles = false;     // also store every particle's position per frame
   std::filesystem::path trajectory; // output trajectory (.h5)
+  std::vector<RenderRequest> render;  // pictures for the pipeline to make (none: no rendering)
   std::string backend = "cpu";      // cpu | cuda | auto
   int threads = 0;                  // 0 = automatic
 };
@@ -87,7 +106,13 @@ Scenario parse_scenario(const std::string& text, const std::filesystem::path& fi
 // Reads and parses a scenario file (InputError naming it when it cannot be read).
 Scenario read_scenario_file(const std::filesystem::path& path);
 
+// What the scenario reads and writes, as JSON for the pipeline (ctsurg-sim --describe): the model
+// kind, the input files it names (grid, surface, tetmesh: those it needs), the trajectory, and the
+// render requests.
+std::string describe_scenario(const Scenario& scenario);
+
 const char* to_string(ModelKind kind);
+const char* to_string(FemLaw law);
 const char* to_string(ToolAction::Kind kind);
 
 }  // namespace ctsurg::sim
