@@ -6,14 +6,56 @@ namespace ctsurg::sim {
 
 const char* backend_name(Backend backend) { return backend == Backend::cpu ? "cpu" : "cuda"; }
 
-bool backend_available(Backend backend) { return backend == Backend::cpu; }
+bool cuda_built() {
+#if defined(CTSURG_HAVE_CUDA)
+  return true;
+#else
+  return false;
+#endif
+}
+
+// cuda_device_count() is defined with the device code (device_simulation_cuda.cu), or as 0 in
+// device_simulation.cpp when the build has no CUDA.
+
+bool backend_available(Backend backend) {
+  if (backend == Backend::cpu) return true;
+  return cuda_built() && cuda_device_count() > 0;
+}
+
+namespace {
+
+// Why cuda cannot run here, or "" when it can.
+std::string cuda_unavailable_reason() {
+  if (!cuda_built())
+    return "cuda was asked for but this build has no CUDA kernels (CTSURG_CUDA is OFF or nvcc was absent at "
+           "configure time); use cpu or auto";
+  if (cuda_device_count() == 0)
+    return "cuda was asked for but no CUDA device was found (no GPU, no driver, or CUDA_VISIBLE_DEVICES hides "
+           "it); use cpu or auto";
+  return "";
+}
+
+}  // namespace
 
 void require_backend(Backend backend, const std::string& where) {
-  if (backend_available(backend)) return;
+  if (backend == Backend::cpu) return;
+  const std::string reason = cuda_unavailable_reason();
+  if (!reason.empty()) throw InputError(where, "backend", reason);
   throw InputError(where, "backend",
-                   std::string(backend_name(backend)) +
-                       " was asked for but this build has no CUDA kernels (CTSURG_CUDA is OFF, nvcc is absent, "
-                       "or the CUDA sim backend is not built yet); use cpu");
+                   "cuda was asked for, but this function works on host arrays and runs on the CPU only; the CUDA "
+                   "backend is DeviceSimulation (ctsurg/sim/device_simulation.h), which keeps the state on the "
+                   "device");
+}
+
+Backend resolve_backend(const std::string& name, const std::string& where) {
+  if (name == "cpu") return Backend::cpu;
+  if (name == "auto") return backend_available(Backend::cuda) ? Backend::cuda : Backend::cpu;
+  if (name == "cuda") {
+    const std::string reason = cuda_unavailable_reason();
+    if (!reason.empty()) throw InputError(where, "backend", reason);
+    return Backend::cuda;
+  }
+  throw InputError(where, "backend", "must be cpu, cuda or auto, got '" + name + "'");
 }
 
 }  // namespace ctsurg::sim

@@ -12,12 +12,27 @@ enum class Backend { cpu, cuda };
 
 const char* backend_name(Backend backend);
 
-// Whether this build can run `backend` (cpu always; cuda never in this build: no .cu compiled yet).
+// Whether this build has the CUDA kernels (CTSURG_CUDA enabled and nvcc found at configure time).
+bool cuda_built();
+// Number of CUDA devices the runtime sees (queried once, then cached); 0 in a build without CUDA,
+// without a driver, or without a device.
+int cuda_device_count();
+
+// Whether `backend` can run here: cpu always; cuda when the build has CUDA and a device is present.
 bool backend_available(Backend backend);
 
-// Throws InputError(where, "backend", "...") when `backend` is not available in this build, e.g.
-// "step: backend: cuda was asked for but this build has no CUDA kernels (CTSURG_CUDA is OFF or nvcc
-// absent); use cpu". Every dispatcher calls it first.
+// The backend named by a scenario or command line: "cpu", "cuda" or "auto" (cuda when available,
+// else cpu). Throws InputError(where, "backend", ...) for another name, and as require_backend for
+// "cuda" where it is not available.
+Backend resolve_backend(const std::string& name, const std::string& where = "backend");
+
+// Throws InputError(where, "backend", "...") unless the dispatcher `where`, which works on host
+// arrays (step, probe_sphere, move_surface, the FEM solvers, ...), can run `backend`. That is cpu
+// always, and cuda never: without CUDA the message says so ("cuda was asked for but this build has no
+// CUDA kernels (CTSURG_CUDA is OFF or nvcc was absent at configure time); use cpu or auto", or "... but
+// no CUDA device was found ..."); with a device it names DeviceSimulation (device_simulation.h), the
+// CUDA backend, which keeps the state on the device. Every dispatcher calls it first, so asking for
+// cuda never runs the CPU silently.
 void require_backend(Backend backend, const std::string& where);
 
 }  // namespace ctsurg::sim

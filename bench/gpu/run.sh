@@ -1,0 +1,89 @@
+#!/usr/bin/env bash
+# One command on a machine with a CUDA GPU (docs/gpu.md): builds ctsurg with CUDA, runs the gpu tests
+# (CPU vs GPU agreement), the same tests under compute-sanitizer memcheck and racecheck, and the
+# DeviceSimulation benchmark, and writes a markdown report for docs/benchmarks.md.
+#
+#   bench/gpu/run.sh [build-dir]        (default build-gpu; report in <build-dir>/gpu-report.md)
+#
+# Environment: CUDA_ARCHS (default "native": the GPU of this machine; e.g. "80;86;89;90"), JOBS
+# (default: all cores), BENCH_MIN_TIME (Google Benchmark min time per case in seconds, default 0.5).
+# Exit status: non-zero when a step fails (the report says which); every step runs regardless.
+set -uo pipefail
+cd "$(dirname "$0")/../.."
+build=${1:-build-gpu}
+archs=${CUDA_ARCHS:-native}
+jobs=${JOBS:-$(nproc)}
+min_time=${BENCH_MIN_TIME:-0.5}
+report="$build/gpu-report.md"
+status=0
+
+step() {  # step <name> <command...>: runs, logs to $build/<name>.log, records pass/fail
+  local name=$1; shift
+  echo "== $name: $*" >&2
+  if "$@" >"$build/$name.log" 2>&1; then results+=("| $name | pass |"); else results+=("| $name | **FAIL** (see $build/$name.log) |"); status=1; fi
+  tail -n 5 "$build/$name.log" >&2
+}
+
+mkdir -p "$build"
+results=()
+nvidia-smi --query-gpu=name,driver_version,memory.total,clocks.max.memory --format=csv >"$build/nvidia-smi.txt" 2>&1 || true
+step configure cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release -DCTSURG_CUDA=ON \
+  "-DCMAKE_CUDA_ARCHITECTURES=$archs"
+step build cmake --build "$build" -j "$jobs" --target test_device_simulation test_backend test_spring_mass_step \
+  test_explicit_spring_model test_sphere_tools test_spring_cutting test_surface_coupling bench_device_simulation
+step tests-gpu ctest --test-dir "$build" -L gpu --output-on-failure --no-tests=error
+step tests-cpu-kernels ctest --test-dir "$build" -L unit -R 'Backend|SpringMassStep|ExplicitSpring|SphereTools|SpringCutting|SurfaceCoupling' --output-on-failure
+# No test may be skipped here: the GPU is present, so a skip means the device was not found.
+step no-skips bash -c "! grep -q 'Skipped' '$build/tests-gpu.log'"
+if command -v compute-sanitizer >/dev/null 2>&1; then
+  sanitizer=compute-sanitizer
+elif [ -x /usr/local/cuda/bin/compute-sanitizer ]; then
+  sanitizer=/usr/local/cuda/bin/compute-sanitizer
+else
+  sanitizer=""
+fi
+if [ -n "$sanitizer" ]; then
+  step memcheck "$sanitizer" --tool memcheck --error-exitcode 1 --leak-check full "$build/bin/test_device_simulation"
+  step racecheck "$sanitizer" --tool racecheck --error-exitcode 1 "$build/bin/test_device_simulation"
+  step synccheck "$sanitizer" --tool synccheck --error-exitcode 1 "$build/bin/test_device_simulation"
+else
+  results+=("| compute-sanitizer | **not found** |"); status=1
+fi
+step bench "$build/bin/bench_device_simulation" --benchmark_format=console --benchmark_out_format=json \
+  "--benchmark_out=$build/bench_device_simulation.json" "--benchmark_min_time=${min_time}"
+
+{
+  echo "## GPU: DeviceSimulation (bench/gpu/run.sh, $(date -u +%Y-%m-%d))"
+  echo
+  echo '```'
+  cat "$build/nvidia-smi.txt"
+  head -n 1 "$build/bench.log"
+  echo '```'
+  echo
+  echo "| check | result |"
+  echo "|---|---|"
+  printf '%s\n' "${results[@]}"
+  echo
+  if [ -s "$build/bench_device_simulation.json" ]; then
+    python3 - "$build/bench_device_simulation.json" <<'PY'
+import json, sys
+data = json.load(open(sys.argv[1]))
+print("| model | particles | iterations/s | particle updates/s | B/particle/step | GB/s | of peak |")
+print("|---|---:|---:|---:|---:|---:|---:|")
+for b in data["benchmarks"]:
+    if b.get("run_type") == "aggregate":
+        continue
+    model = "grid (implicit)" if "Grid" in b["name"] else "explicit (CSR)"
+    peak = b.get("peak_GB/s", 0)
+    frac = f'{100 * b["GB/s"] / peak:.0f}%' if peak else "n/a"
+    print(f'| {model} | {int(b["particles"]):,} | {b["items_per_second"]:,.0f} | {b["particle_updates/s"]:.3g} | '
+          f'{b["bytes_per_particle"]:.0f} | {b["GB/s"]:.0f} | {frac} |')
+print()
+print("Targets (issue 6): 100k particles >= 50,000 iterations/s; 10M particles >= 60% of the peak bandwidth "
+      "with the bytes per particle per step stated in bench/bench_device_simulation.cpp.")
+PY
+  fi
+} >"$report"
+cat "$report"
+echo "report: $report" >&2
+exit $status

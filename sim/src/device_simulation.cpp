@@ -1,0 +1,219 @@
+// DeviceSimulation, host side: every argument is checked here, once, before the device side
+// (device_simulation_cuda.cu) is called (STYLE.md rule 7). In a build without CUDA the device side is
+// replaced by the stubs at the end of this file: the constructor refuses with a clear message, so no
+// other stub is ever reached.
+#include "ctsurg/sim/device_simulation.h"
+
+#include "device_simulation_cuda.cuh"
+
+#include "ctsurg/core/error.h"
+#include "ctsurg/sim/surface_coupling.h"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+#include <utility>
+
+namespace ctsurg::sim {
+namespace {
+
+constexpr const char* kWhere = "device simulation";
+
+// As step() in spring_mass_step.cpp checks them (threads is ignored on the device).
+VerletConstants step_constants(const StepParameters& p, const char* where) {
+  if (!(std::isfinite(p.dt) && p.dt > 0)) throw InputError(where, "dt", "must be finite and > 0, got " + std::to_string(p.dt));
+  if (!(p.damping >= 0 && p.damping < 1))
+    throw InputError(where, "damping", "must be in [0, 1), got " + std::to_string(p.damping));
+  for (double g : p.gravity)
+    if (!std::isfinite(g)) throw InputError(where, "gravity", "must be finite");
+  return {static_cast<Real>(p.dt * p.dt), static_cast<Real>(1.0 / p.dt), static_cast<Real>(1.0 - p.damping),
+          static_cast<Real>(p.gravity[0]), static_cast<Real>(p.gravity[1]), static_cast<Real>(p.gravity[2])};
+}
+
+SphereView sphere_view(const std::array<double, 3>& centre, double radius, const char* where) {
+  for (double c : centre)
+    if (!std::isfinite(c)) throw InputError(where, "centre", "must be finite");
+  if (!(std::isfinite(radius) && radius > 0))
+    throw InputError(where, "radius", "must be finite and > 0, got " + std::to_string(radius));
+  return {static_cast<Real>(centre[0]), static_cast<Real>(centre[1]), static_cast<Real>(centre[2]),
+          static_cast<Real>(radius)};
+}
+
+void check_state(const ParticleState& state, int32_t particles, const char* where) {
+  if (state.count() != particles)
+    throw InputError(where, "state", "has " + std::to_string(state.count()) + " particles, the model " +
+                                         std::to_string(particles));
+  const auto n = static_cast<std::size_t>(particles);
+  for (const auto* v : {&state.px, &state.py, &state.pz, &state.y, &state.z, &state.inv_mass})
+    if (v->size() != n) throw InputError(where, "state", "arrays of different lengths");
+}
+
+}  // namespace
+
+DeviceSimulation::DeviceSimulation(int ordinal) : impl_(std::make_unique<Impl>(ordinal)) {}
+DeviceSimulation::~DeviceSimulation() = default;
+DeviceSimulation::DeviceSimulation(DeviceSimulation&&) noexcept = default;
+DeviceSimulation& DeviceSimulation::operator=(DeviceSimulation&&) noexcept = default;
+
+DeviceInfo DeviceSimulation::device_info() const { return impl_->info(); }
+
+void DeviceSimulation::upload(const SpringGridModel& model, const ParticleState& state) {
+  const int32_t n = model.particle_count();
+  check_state(state, n, "device upload");
+  if (model.neighbours.size() != static_cast<std::size_t>(kGridDirections) * n || model.spring_mask.size() != static_cast<std::size_t>(n))
+    throw InputError("device upload", "model", "neighbour table or spring masks do not match the particle count");
+  impl_->upload_grid(model, state);
+}
+
+void DeviceSimulation::upload(const ExplicitSpringModel& model, const ParticleState& state) {
+  const int32_t n = model.particle_count();
+  check_state(state, n, "device upload");
+  const auto s = static_cast<std::size_t>(model.spring_count());
+  if (model.row_offsets.size() != static_cast<std::size_t>(n) + 1 || model.row_neighbour.size() != 2 * s ||
+      model.row_spring.size() != 2 * s || model.spring_ends.size() != 2 * s || model.stiffness.size() != s ||
+      model.rest_length.size() != s || model.damping.size() != s)
+    throw InputError("device upload", "model", "CSR rows or spring arrays do not match the spring count");
+  impl_->upload_explicit(model, state);
+}
+
+void DeviceSimulation::upload_state(const ParticleState& state) {
+  if (impl_->kind == Impl::ModelKind::none) throw InputError("device upload", "model", "upload a model first");
+  check_state(state, impl_->particles, "device upload");
+  impl_->upload_state(state);
+}
+
+int32_t DeviceSimulation::particle_count() const { return impl_->particles; }
+
+void DeviceSimulation::step(int64_t steps, const StepParameters& parameters) {
+  const VerletConstants c = step_constants(parameters, "device step");
+  if (steps < 0) throw InputError("device step", "steps", "must be >= 0, got " + std::to_string(steps));
+  if (impl_->kind == Impl::ModelKind::none) throw InputError("device step", "model", "upload a model first");
+  if (steps > 0) impl_->step(steps, c);
+}
+
+ParticleNormals DeviceSimulation::normals(const StepParameters& parameters) {
+  const VerletConstants c = step_constants(parameters, "device normals");
+  if (impl_->kind == Impl::ModelKind::none) throw InputError("device normals", "model", "upload a model first");
+  ParticleNormals n;
+  impl_->normals(c, n);
+  return n;
+}
+
+int64_t DeviceSimulation::probe(const Sphere& tool) {
+  const SphereView s = sphere_view(tool.centre, tool.radius, "device probe");
+  if (impl_->kind == Impl::ModelKind::none) throw InputError("device probe", "model", "upload a model first");
+  return impl_->probe(s);
+}
+
+Grab DeviceSimulation::grab(const Sphere& tool) {
+  const SphereView s = sphere_view(tool.centre, tool.radius, "device grab");
+  if (impl_->kind == Impl::ModelKind::none) throw InputError("device grab", "model", "upload a model first");
+  return impl_->grab(s);
+}
+
+void DeviceSimulation::apply_grab(const std::array<double, 3>& centre) {
+  const SphereView s = sphere_view(centre, 1.0, "device grab");
+  if (!impl_->grab_held) throw InputError("device grab", "grab", "no grab is held (call grab() first)");
+  impl_->apply_grab(s);
+}
+
+void DeviceSimulation::release_grab() { impl_->release_grab(); }
+bool DeviceSimulation::grab_held() const { return impl_->grab_held; }
+
+int64_t DeviceSimulation::cut_springs_crossing_triangle(const Triangle& blade) {
+  TriangleView v{};
+  for (int a = 0; a < 3; ++a) {
+    if (!std::isfinite(blade.a[a]) || !std::isfinite(blade.b[a]) || !std::isfinite(blade.c[a]))
+      throw InputError("device cut", "blade", "triangle corners must be finite");
+    v.a[a] = blade.a[a], v.b[a] = blade.b[a], v.c[a] = blade.c[a];
+  }
+  if (impl_->kind == Impl::ModelKind::none) throw InputError("device cut", "model", "upload a model first");
+  return impl_->cut(v);
+}
+
+void DeviceSimulation::set_surface(const SurfaceCoupling& coupling, const std::vector<Real>& rest_positions) {
+  if (impl_->kind == Impl::ModelKind::none) throw InputError("device surface", "model", "upload a model first");
+  const int32_t n = impl_->particles;
+  if (rest_positions.size() != 3 * static_cast<std::size_t>(n))
+    throw InputError("device surface", "rest_positions", "expected 3 x the model's particle count");
+  const auto v = static_cast<std::size_t>(coupling.vertex_count());
+  if (coupling.rest_vertices.size() != 3 * v || coupling.particles.size() != 8 * v || coupling.weights.size() != 8 * v)
+    throw InputError("device surface", "coupling", "expected 8 particles and weights and 3 coordinates per vertex");
+  if (std::any_of(coupling.particles.begin(), coupling.particles.end(), [n](int32_t p) { return p >= n; }))
+    throw InputError("device surface", "coupling", "names a particle the model does not have");
+  impl_->set_surface(coupling.particles.data(), coupling.weights.data(), coupling.rest_vertices.data(),
+                     coupling.vertex_count(), rest_positions.data());
+}
+
+void DeviceSimulation::move_surface_async() {
+  if (impl_->surface_vertices < 0) throw InputError("device surface", "surface", "no surface set (call set_surface() first)");
+  impl_->move_surface_async();
+}
+
+std::span<const float> DeviceSimulation::wait_surface() {
+  if (impl_->frames_queued == 0) throw InputError("device surface", "frame", "no frame queued (call move_surface_async() first)");
+  return impl_->wait_surface();
+}
+
+void DeviceSimulation::download_state(ParticleState& state) const {
+  if (impl_->kind == Impl::ModelKind::none) throw InputError("device download", "model", "upload a model first");
+  impl_->download_state(state);
+}
+
+void DeviceSimulation::download_springs(SpringGridModel& model) const {
+  if (impl_->kind != Impl::ModelKind::grid || model.particle_count() != impl_->particles)
+    throw InputError("device download", "model", "is not the uploaded grid model");
+  impl_->download_grid_masks(model.spring_mask.data());
+}
+
+void DeviceSimulation::download_springs(ExplicitSpringModel& model) const {
+  if (impl_->kind != Impl::ModelKind::explicit_springs || model.particle_count() != impl_->particles ||
+      model.spring_count() != impl_->springs)
+    throw InputError("device download", "model", "is not the uploaded explicit model");
+  impl_->download_alive(model.alive.data());
+  sync_cut_springs(model);
+}
+
+void DeviceSimulation::synchronize() const { impl_->synchronize(); }
+
+#if !defined(CTSURG_HAVE_CUDA)
+
+// No CUDA in this build: the constructor refuses; the other members are unreachable.
+int cuda_device_count() { return 0; }
+
+DeviceInfo cuda_device_info(int) {
+  require_backend(Backend::cuda, kWhere);
+  return {};
+}
+
+struct DeviceSimulation::Impl::Device {};
+
+DeviceSimulation::Impl::Impl(int) { require_backend(Backend::cuda, kWhere); }
+DeviceSimulation::Impl::~Impl() = default;
+
+namespace {
+[[noreturn]] void unreachable() { throw RuntimeError("device simulation: this build has no CUDA"); }
+}  // namespace
+
+DeviceInfo DeviceSimulation::Impl::info() const { unreachable(); }
+void DeviceSimulation::Impl::upload_grid(const SpringGridModel&, const ParticleState&) { unreachable(); }
+void DeviceSimulation::Impl::upload_explicit(const ExplicitSpringModel&, const ParticleState&) { unreachable(); }
+void DeviceSimulation::Impl::upload_state(const ParticleState&) { unreachable(); }
+void DeviceSimulation::Impl::step(int64_t, const VerletConstants&) { unreachable(); }
+void DeviceSimulation::Impl::normals(const VerletConstants&, ParticleNormals&) { unreachable(); }
+int64_t DeviceSimulation::Impl::probe(const SphereView&) { unreachable(); }
+Grab DeviceSimulation::Impl::grab(const SphereView&) { unreachable(); }
+void DeviceSimulation::Impl::apply_grab(const SphereView&) { unreachable(); }
+void DeviceSimulation::Impl::release_grab() { unreachable(); }
+int64_t DeviceSimulation::Impl::cut(const TriangleView&) { unreachable(); }
+void DeviceSimulation::Impl::set_surface(const int32_t*, const Real*, const Real*, int64_t, const Real*) { unreachable(); }
+void DeviceSimulation::Impl::move_surface_async() { unreachable(); }
+std::span<const float> DeviceSimulation::Impl::wait_surface() { unreachable(); }
+void DeviceSimulation::Impl::download_state(ParticleState&) const { unreachable(); }
+void DeviceSimulation::Impl::download_grid_masks(uint32_t*) const { unreachable(); }
+void DeviceSimulation::Impl::download_alive(uint8_t*) const { unreachable(); }
+void DeviceSimulation::Impl::synchronize() const { unreachable(); }
+
+#endif
+
+}  // namespace ctsurg::sim
