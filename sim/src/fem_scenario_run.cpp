@@ -70,32 +70,9 @@ Trajectory run_fem_scenario(const Scenario& s, RunReport* report_out, const std:
 
   // Fixed regions (nodes).
   std::vector<Real> rest_real(rest.begin(), rest.end());
-  std::set<int32_t> fixed;
-  for (size_t r = 0; r < s.fixed.size(); ++r) {
-    const auto& f = s.fixed[r];
-    std::vector<int32_t> ids;
-    if (f.kind == FixedRegionSpec::Kind::box) {
-      Box local = f.box;
-      for (size_t c = 0; c < 3; ++c) local.min[c] -= origin[c], local.max[c] -= origin[c];
-      ids = particles_in_box(rest_real, local);
-    } else if (f.kind == FixedRegionSpec::Kind::box_fraction) {
-      ids = particles_in_box(rest_real, {bounds.at(f.box.min), bounds.at(f.box.max)});
-    } else if (f.kind == FixedRegionSpec::Kind::half_space) {
-      HalfSpace local = f.half_space;
-      for (size_t c = 0; c < 3; ++c) local.point[c] -= origin[c];
-      ids = particles_in_half_space(rest_real, local);
-    } else {
-      std::set<int32_t> nodes;
-      for (int64_t t = 0; t < mesh.tet_count(); ++t) {
-        if (mesh.tet_labels[static_cast<size_t>(t)] != f.label) continue;
-        for (int k = 0; k < 4; ++k) nodes.insert(mesh.tets[static_cast<size_t>(4 * t + k)]);
-      }
-      ids.assign(nodes.begin(), nodes.end());
-    }
-    if (ids.empty()) throw InputError(sfile, "fixed[" + std::to_string(r) + "]", "selects no node of the tet mesh");
-    fixed.insert(ids.begin(), ids.end());
-  }
-  const std::vector<int32_t> fixed_nodes(fixed.begin(), fixed.end());
+  const std::vector<int32_t> fixed_nodes =
+      fixed_particles(s, rest_real, bounds, origin, [&](uint16_t label) { return nodes_with_label(mesh, label); });
+  const std::set<int32_t> fixed(fixed_nodes.begin(), fixed_nodes.end());
   report.fixed = static_cast<int64_t>(fixed_nodes.size());
 
   // Surface embedded in the tets.

@@ -104,41 +104,9 @@ Trajectory run_scenario(const Scenario& s, RunReport* report_out, const std::fun
   const Bounds bounds = bounds_of(rest);
 
   // Fixed regions.
-  std::set<int32_t> fixed;
-  for (size_t r = 0; r < s.fixed.size(); ++r) {
-    const auto& f = s.fixed[r];
-    std::vector<int32_t> ids;
-    switch (f.kind) {
-      case FixedRegionSpec::Kind::box: {
-        Box local = f.box;
-        for (size_t c = 0; c < 3; ++c) local.min[c] -= origin[c], local.max[c] -= origin[c];
-        ids = particles_in_box(rest, local);
-        break;
-      }
-      case FixedRegionSpec::Kind::box_fraction: ids = particles_in_box(rest, {bounds.at(f.box.min), bounds.at(f.box.max)}); break;
-      case FixedRegionSpec::Kind::half_space: {
-        HalfSpace local = f.half_space;
-        for (size_t c = 0; c < 3; ++c) local.point[c] -= origin[c];
-        ids = particles_in_half_space(rest, local);
-        break;
-      }
-      case FixedRegionSpec::Kind::label:
-        if (grid_model) {
-          ids = particles_with_label(*grid_model, grid.label, f.label);
-        } else {
-          std::set<int32_t> nodes;
-          for (int64_t t = 0; t < tetmesh->tet_count(); ++t) {
-            if (tetmesh->tet_labels[static_cast<size_t>(t)] != f.label) continue;
-            for (int k = 0; k < 4; ++k) nodes.insert(tetmesh->tets[static_cast<size_t>(4 * t + k)]);
-          }
-          ids.assign(nodes.begin(), nodes.end());
-        }
-        break;
-    }
-    if (ids.empty()) throw InputError(sfile, "fixed[" + std::to_string(r) + "]", "selects no particle of the model");
-    fixed.insert(ids.begin(), ids.end());
-  }
-  const std::vector<int32_t> fixed_ids(fixed.begin(), fixed.end());
+  const std::vector<int32_t> fixed_ids = fixed_particles(s, rest, bounds, origin, [&](uint16_t label) {
+    return grid_model ? particles_with_label(*grid_model, grid.label, label) : nodes_with_label(*tetmesh, label);
+  });
   fix_particles(state, fixed_ids);
   report.fixed = static_cast<int64_t>(fixed_ids.size());
 

@@ -3,7 +3,10 @@
 // surface measures, and the FEM runner's entry point.
 #pragma once
 
+#include "ctsurg/core/error.h"
+#include "ctsurg/core/tet_mesh_file.h"
 #include "ctsurg/core/trajectory_file.h"
+#include "ctsurg/sim/fixed_regions.h"
 #include "ctsurg/sim/scenario.h"
 #include "ctsurg/sim/scenario_run.h"
 
@@ -11,6 +14,7 @@
 #include <array>
 #include <cmath>
 #include <functional>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -114,6 +118,48 @@ inline double surface_area(const std::vector<float>& v, const std::vector<uint32
 // The whole-millimetre point near the middle of a bounding box that a run uses as its local origin.
 inline Vec3 local_origin(const Vec3& lo, const Vec3& hi) {
   return {std::round(0.5 * (lo[0] + hi[0])), std::round(0.5 * (lo[1] + hi[1])), std::round(0.5 * (lo[2] + hi[2]))};
+}
+
+// The nodes of the tets with label `label` (increasing).
+inline std::vector<int32_t> nodes_with_label(const TetMesh& mesh, uint16_t label) {
+  std::set<int32_t> nodes;
+  for (int64_t t = 0; t < mesh.tet_count(); ++t) {
+    if (mesh.tet_labels[static_cast<size_t>(t)] != label) continue;
+    for (int k = 0; k < 4; ++k) nodes.insert(mesh.tets[static_cast<size_t>(4 * t + k)]);
+  }
+  return {nodes.begin(), nodes.end()};
+}
+
+// The union (increasing ids) of the scenario's fixed regions over the rest positions `rest` (#P x 3,
+// the run's local frame: LPS minus `origin`); `by_label` selects a label's particles. InputError
+// naming "fixed[r]" when a region selects nothing.
+inline std::vector<int32_t> fixed_particles(const Scenario& s, const std::vector<Real>& rest, const Bounds& bounds,
+                                            const Vec3& origin,
+                                            const std::function<std::vector<int32_t>(uint16_t)>& by_label) {
+  std::set<int32_t> fixed;
+  for (size_t r = 0; r < s.fixed.size(); ++r) {
+    const auto& f = s.fixed[r];
+    std::vector<int32_t> ids;
+    switch (f.kind) {
+      case FixedRegionSpec::Kind::box: {
+        Box local = f.box;
+        for (size_t c = 0; c < 3; ++c) local.min[c] -= origin[c], local.max[c] -= origin[c];
+        ids = particles_in_box(rest, local);
+        break;
+      }
+      case FixedRegionSpec::Kind::box_fraction: ids = particles_in_box(rest, {bounds.at(f.box.min), bounds.at(f.box.max)}); break;
+      case FixedRegionSpec::Kind::half_space: {
+        HalfSpace local = f.half_space;
+        for (size_t c = 0; c < 3; ++c) local.point[c] -= origin[c];
+        ids = particles_in_half_space(rest, local);
+        break;
+      }
+      case FixedRegionSpec::Kind::label: ids = by_label(f.label); break;
+    }
+    if (ids.empty()) throw InputError(s.file.string(), "fixed[" + std::to_string(r) + "]", "selects no particle or node of the model");
+    fixed.insert(ids.begin(), ids.end());
+  }
+  return {fixed.begin(), fixed.end()};
 }
 
 // scenario.model == fem (fem_scenario_run.cpp).
