@@ -30,7 +30,8 @@ nvidia-smi --query-gpu=name,driver_version,memory.total,clocks.max.memory --form
 step configure cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release -DCTSURG_CUDA=ON \
   "-DCMAKE_CUDA_ARCHITECTURES=$archs"
 step build cmake --build "$build" -j "$jobs" --target test_device_simulation test_backend test_spring_mass_step \
-  test_explicit_spring_model test_sphere_tools test_spring_cutting test_surface_coupling bench_device_simulation
+  test_explicit_spring_model test_sphere_tools test_spring_cutting test_surface_coupling test_scenario_gpu ctsurg-sim \
+  bench_device_simulation
 step tests-gpu ctest --test-dir "$build" -L gpu --output-on-failure --no-tests=error
 step tests-cpu-kernels ctest --test-dir "$build" -L unit -R 'Backend|SpringMassStep|ExplicitSpring|SphereTools|SpringCutting|SurfaceCoupling' --output-on-failure
 # No test may be skipped here: the GPU is present, so a skip means the device was not found.

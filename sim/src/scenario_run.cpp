@@ -16,6 +16,7 @@
 #include "ctsurg/sim/surface_cutting.h"
 #include "ctsurg/sim/tet_embedding.h"
 #include "scenario_support.h"
+#include "spring_engine.h"
 
 #include <algorithm>
 #include <chrono>
@@ -59,8 +60,8 @@ Trajectory run_scenario(const Scenario& s, RunReport* report_out, const std::fun
   if (s.model == ModelKind::fem) return run_fem_scenario(s, report_out, progress);
   RunReport report;
   const std::string sfile = s.file.string();
-  const Backend backend = s.backend == "cuda" ? Backend::cuda : Backend::cpu;  // auto: cpu unless CUDA is built
-  if (s.backend == "cuda") require_backend(Backend::cuda, sfile + ": backend");
+  // cuda: InputError unless this build has CUDA and a device is present; auto: cuda exactly then.
+  const Backend backend = resolve_backend(s.backend, sfile + ": backend");
 
   // The model.
   // The simulation runs in LPS shifted by `origin`, a whole-millimetre point near the grid's centre:
@@ -201,7 +202,7 @@ Trajectory run_scenario(const Scenario& s, RunReport* report_out, const std::fun
 
   const auto record_frame = [&](double t) {
     if (has_surface) {
-      move_surface(coupling, state, rest, vertices, backend, s.threads);
+      move_surface(coupling, state, rest, vertices, Backend::cpu, s.threads);
     } else {
       vertices.resize(static_cast<size_t>(3 * np));
       for (int64_t i = 0; i < np; ++i) {
@@ -273,6 +274,25 @@ Trajectory run_scenario(const Scenario& s, RunReport* report_out, const std::fun
   params.gravity = s.gravity;
   params.threads = s.threads;
 
+  // Where the state is stepped. On a CUDA device (docs/gpu.md) the run holds one grab at a time and no
+  // force tool (DeviceSimulation holds one grab; a force changes the state on the host every step),
+  // and restarts after instability are not offered.
+  std::unique_ptr<SpringEngine> engine;
+  if (backend == Backend::cuda) {
+    int grabs = 0;
+    for (const auto& t : s.tools) {
+      grabs += t.kind == ToolAction::Kind::grab;
+      if (t.kind == ToolAction::Kind::force) {
+        throw InputError(sfile, t.label, "force tools run on the cpu backend only; set backend: cpu");
+      }
+    }
+    if (grabs > 1) throw InputError(sfile, "backend", "the cuda backend holds one grab at a time; set backend: cpu");
+    engine = std::make_unique<DeviceSpringEngine>(model, state);
+    report.notes.push_back("backend cuda: " + cuda_device_info(0).name);
+  } else {
+    engine = std::make_unique<HostSpringEngine>(model, state, s.threads);
+  }
+
   // Cuts the springs and the surface crossing the quad swept by the blade's edge from centre c0 to c1.
   const double shortest_spring = std::visit([](const auto& m) -> double {
     if constexpr (std::is_same_v<std::decay_t<decltype(m)>, SpringGridModel>) {
@@ -285,10 +305,11 @@ Trajectory run_scenario(const Scenario& s, RunReport* report_out, const std::fun
     const auto& e = spec.blade_edge_mm;
     const Vec3 a0{c0[0] - e[0] / 2, c0[1] - e[1] / 2, c0[2] - e[2] / 2}, b0{c0[0] + e[0] / 2, c0[1] + e[1] / 2, c0[2] + e[2] / 2};
     const Vec3 a1{c1[0] - e[0] / 2, c1[1] - e[1] / 2, c1[2] - e[2] / 2}, b1{c1[0] + e[0] / 2, c1[1] + e[1] / 2, c1[2] + e[2] / 2};
-    if (has_surface) move_surface(coupling, state, rest, vertices, backend, s.threads);
+    engine->to_host();
+    if (has_surface) move_surface(coupling, state, rest, vertices, Backend::cpu, s.threads);
     for (const Triangle& tri : {Triangle{a0, b0, b1}, Triangle{a0, b1, a1}}) {
       if (has_surface) triangles_removed += cut_surface(triangles, coupling, vertices, state, tri).triangles_removed;
-      springs_cut += std::visit([&](auto& m) { return cut_springs_crossing_triangle(m, state, tri, backend, s.threads); }, model);
+      springs_cut += engine->cut(tri);
     }
   };
 
@@ -302,14 +323,14 @@ Trajectory run_scenario(const Scenario& s, RunReport* report_out, const std::fun
   bool tool_work = false;  // a tool acted since the last stability check
   while (next_frame < frame_count) {
     const double t_next = t + dt;
-    std::visit([&](const auto& m) { step(m, state, params, backend); }, model);
+    engine->step(params);
     ++steps;
     for (auto& ts : tools) {
       const ToolAction& spec = *ts.spec;
       const Vec3 c = ts.path.at(t_next);
       if (spec.kind == ToolAction::Kind::grab) {
         if (!ts.grab && !ts.released && ts.active(t_next)) {
-          ts.grab = grab_particles_in_sphere(state, {c, spec.radius_mm}, backend, s.threads);
+          ts.grab = engine->capture({c, spec.radius_mm}, true);
           if (ts.grab->particles.empty()) {
             throw InputError(sfile, spec.label, "grabs no particle at t = " + std::to_string(t_next) + " s (sphere of radius " +
                                                     std::to_string(spec.radius_mm) + " mm at (" + std::to_string(c[0] + origin[0]) + ", " +
@@ -321,11 +342,12 @@ Trajectory run_scenario(const Scenario& s, RunReport* report_out, const std::fun
         }
         if (ts.grab && !ts.active(t_next)) {
           ts.grab.reset();
+          engine->release_grab();
           ts.released = true;
           tool_work = true;  // the release turns the stretch into motion
         }
         if (ts.grab) {
-          apply_grab(state, *ts.grab, c, backend, s.threads);
+          engine->apply_grab(*ts.grab, c);
           tool_work = true;
         }
       } else if (spec.kind == ToolAction::Kind::force) {
@@ -333,7 +355,7 @@ Trajectory run_scenario(const Scenario& s, RunReport* report_out, const std::fun
         // update: applied after the step, as the papers apply the tools, it is the same update as a
         // force inside the step (x_next = ... + (f + F / n) / m dt^2).
         if (ts.loaded.empty() && !ts.released && ts.active(t_next)) {
-          const Grab inside = grab_particles_in_sphere(state, {c, spec.radius_mm}, backend, s.threads);
+          const Grab inside = engine->capture({c, spec.radius_mm}, false);
           for (const int32_t i : inside.particles) {
             if (state.inv_mass[static_cast<size_t>(i)] > 0) ts.loaded.push_back(i);
           }
@@ -358,7 +380,7 @@ Trajectory run_scenario(const Scenario& s, RunReport* report_out, const std::fun
         }
         tool_work |= !ts.loaded.empty();
       } else if (spec.kind == ToolAction::Kind::probe) {
-        if (ts.active(t_next)) tool_work |= probe_sphere(state, {c, spec.radius_mm}, backend, s.threads) > 0;
+        if (ts.active(t_next)) tool_work |= engine->probe({c, spec.radius_mm}) > 0;
       } else {
         // The blade cuts what its edge swept since the last sweep (from ts.cut_from to now), once it has
         // moved a quarter of the shortest spring or reaches a keyframe or its end: each sweep then lies
@@ -391,10 +413,11 @@ Trajectory run_scenario(const Scenario& s, RunReport* report_out, const std::fun
     const double frame_time = static_cast<double>(next_frame) * s.frame_interval_s;
     const bool frame_due = t >= frame_time - 0.5 * dt;
     if (frame_due || steps % 1000 == 0) {
+      engine->to_host();
       const StabilityReport check = guard.check(state, t, tool_work);
       tool_work = false;
       if (!check.stable) {
-        if (halvings >= s.max_step_halvings) {
+        if (halvings >= s.max_step_halvings || engine->on_device()) {
           throw RuntimeError(sfile + ": the run became unstable: " + check.message +
                              (s.max_step_halvings > 0 ? " (after " + std::to_string(halvings) + " step halvings)"
                                                       : " Set time.dt_s lower, or allow time.max_step_halvings."));
