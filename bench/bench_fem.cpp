@@ -7,6 +7,9 @@
 //    linear material under the same grab (one Newton step); diagonal and incomplete-Cholesky
 //    preconditioned CG. Counters: Newton iterations, mean CG iterations per Newton step, ms per Newton
 //    iteration, assembly and CG ms.
+// 3. The cantilever of tests/sim/test_fem_static_solver.cpp at finer meshes than the test can afford
+//    (n = 8, 12, 14 cells across the thickness, L = 10 h): counter error_pct = tip deflection error
+//    against Euler-Bernoulli (linear tets lock in bending: the error falls as n^-2).
 // 2. Explicit dynamics: element updates per second (tets x steps / s) of the full step (element pass,
 //    node gather, central-difference update) at 10k .. 500k tets, 1 and 2 threads.
 #include "ctsurg/sim/fem_box_mesh.h"
@@ -111,5 +114,62 @@ BENCHMARK(BM_FemExplicitStep)
     ->UseRealTime();
 
 }  // namespace
+
+// Cantilever L x h x h, L = 10 h, clamped at x = 0, a small tip load spread over the end face as a
+// uniform shear traction (area / 3 per triangle corner); linear material, E 30 kPa, nu 0.3.
+void BM_FemCantileverLinear(benchmark::State& state) {
+  const int n = static_cast<int>(state.range(0));
+  const double h = 2.0, L = 10 * h, E = 3e4;
+  const auto box = fem_box_mesh({10 * n, n, n}, {L, h, h});
+  FemMaterial m;
+  m.model = FemMaterialModel::linear;
+  m.youngs_modulus = E;
+  m.poisson_ratio = 0.3;
+  const FemModel model = build_fem_model(box.nodes, box.tets, m);
+  const double I = h * h * h * h / 12, delta = 1e-3 * L, P = delta * 3 * E * I / (L * L * L);
+  FemBoundaryConditions bc;
+  std::vector<int32_t> tip;
+  for (int32_t i = 0; i < model.node_count(); ++i) {
+    if (std::abs(model.nodes[3 * i]) < 1e-9) bc.fixed_nodes.push_back(i);
+    if (std::abs(model.nodes[3 * i] - L) < 1e-9) tip.push_back(i);
+  }
+  FemLoads loads;
+  loads.forces.assign(model.nodes.size(), 0.0);
+  static const int faces[4][3] = {{1, 2, 3}, {0, 2, 3}, {0, 1, 3}, {0, 1, 2}};
+  const double traction = P / (h * h);
+  for (int32_t e = 0; e < model.tet_count(); ++e) {
+    for (const auto& fc : faces) {
+      int32_t v[3];
+      bool on = true;
+      for (int k = 0; k < 3; ++k) {
+        v[k] = model.tets[4 * e + fc[k]];
+        on = on && std::abs(model.nodes[3 * v[k]] - L) < 1e-9;
+      }
+      if (!on) continue;
+      const double* a = &model.nodes[3 * v[0]];
+      const double* b = &model.nodes[3 * v[1]];
+      const double* c = &model.nodes[3 * v[2]];
+      const double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, w[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+      const double area = 0.5 * std::sqrt(std::pow(u[1] * w[2] - u[2] * w[1], 2) + std::pow(u[2] * w[0] - u[0] * w[2], 2) +
+                                          std::pow(u[0] * w[1] - u[1] * w[0], 2));
+      for (int k = 0; k < 3; ++k) loads.forces[3 * v[k] + 2] += traction * area / 3;
+    }
+  }
+  FemStaticOptions o;
+  o.preconditioner = FemPreconditioner::incomplete_cholesky;
+  double err = 0;
+  int cg = 0;
+  for (auto _ : state) {
+    const auto r = solve_fem_static(model, bc, loads, o);
+    double wsum = 0;
+    for (const int32_t i : tip) wsum += r.displacements[3 * i + 2] / static_cast<double>(tip.size());
+    err = (wsum - delta) / delta;
+    cg = r.report.cg_iterations.empty() ? 0 : r.report.cg_iterations[0];
+  }
+  state.counters["tets"] = model.tet_count();
+  state.counters["error_pct"] = 100 * err;
+  state.counters["cg_iterations"] = cg;
+}
+BENCHMARK(BM_FemCantileverLinear)->Arg(8)->Arg(12)->Arg(14)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
 
 BENCHMARK_MAIN();

@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
 # Reruns every benchmark with one command and rewrites docs/benchmarks.md (machine and date included).
-#   bench/run.sh            build (Release) if needed, then run
+#   bench/run.sh                 build (Release) if needed, then run every section
+#   bench/run.sh render fem      only these sections (preprocess tetmesh surface sim render fem kidney accuracy);
+#                                the others in docs/benchmarks.md stay as they are
 # Real volumes come from ../shared/data; a volume that is absent is left out of the table.
 # Wall times are the best of REPEAT runs (default 3); peak memory is the maximum resident set size
 # reported by GNU time for the whole process.
@@ -8,6 +10,13 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 ROOT=$PWD
 REPEAT=${REPEAT:-3}
+SECTIONS=("$@")
+want() {  # want SECTION: true when SECTION was asked for (or nothing was: every section)
+  [[ ${#SECTIONS[@]} -eq 0 ]] && return 0
+  local x
+  for x in "${SECTIONS[@]}"; do [[ $x == "$1" ]] && return 0; done
+  return 1
+}
 scripts/build.sh >/dev/null
 BIN=$ROOT/build/bin
 DATA=$(cd "$ROOT/.." && pwd)/shared/data
@@ -69,6 +78,7 @@ grid_case() {  # name ct.h5 [mask] -- options...
   printf '| grid (%s particles) | %s | %s | %.2f | %.3g | %d |\n' "$p" "$name" "$n" "$s" "$(awk "BEGIN{print $n/($s>0?$s:0.01)}")" $((m / 1024)) >>"$out"
 }
 
+if want preprocess || want tetmesh || want surface; then
 import_case heart_nifti "$ROOT/data_samples/heart/heart_ct.nii.gz"
 import_case abdomen_nifti "$DATA/abdomen/abdomen_ct.nii.gz"
 import_case head_nrrd "$DATA/headsq/quarter.nhdr" --rescale-intercept -1024
@@ -94,6 +104,7 @@ grid_case head_otsu "$WORK/head_nrrd.h5" -- --otsu --voxel-mm 3.2 --keep-largest
     awk -F, '/BM_DownsampleHeart/{split($1,a,/[:\/]/); n=split($1,p,"/"); c=p[2]; sub(/.*:/,"",c); t=p[3]; sub(/.*:/,"",t);
       printf "| %.1f | %s | %.1f | %.3g | %d |\n", c/10, t, $3, $7, $(NF)}'
 } >>"$out"
+fi
 
 # splice SECTION FILE: puts FILE between <!-- bench:SECTION:start/end --> in docs/benchmarks.md
 # (appending the markers when absent); the other sections stay as they are.
@@ -111,14 +122,14 @@ splice() {
 machine_line() {
   echo "Machine: $(lscpu | awk -F: '/Model name/{gsub(/^ +/,"",$2); print $2}') ($(nproc) cores), $(free -g | awk '/Mem:/{print $2}') GiB;"
 }
-splice preprocess "$out"
+want preprocess && splice preprocess "$out"
 
 # Tetrahedral meshes: ctsurg-tetmesh (CGAL Mesh_3) on the heart grid against TetGen (when installed)
 # meshing the marching-cubes surface of the same grid at a similar tet count. TetGen's mesh is rated
 # by bench/tet_quality.py with the measures of mesh/include/ctsurg/mesh/tet_mesh_quality.h.
 tet=$WORK/tetmesh.md
 heart_grid=$WORK/grid_heart_2.4mm.h5
-if [[ -e $heart_grid ]]; then
+if want tetmesh && [[ -e $heart_grid ]]; then
   {
     echo "## Tetrahedral meshes: heart (\`bench/run.sh\`)"
     echo
@@ -163,7 +174,7 @@ fi
 # fields, 1 and 2 threads. VTK computes normals; ctsurg computes normals and the grid tie.
 mc=$WORK/surface.md
 PEER=$ROOT/tests/peers/flying_edges_peer.py
-if [[ -e $WORK/heart_nifti.h5 && -e $heart_grid ]] && /usr/bin/python3 -c 'import vtk, h5py' 2>/dev/null; then
+if want surface && [[ -e $WORK/heart_nifti.h5 && -e $heart_grid ]] && /usr/bin/python3 -c 'import vtk, h5py' 2>/dev/null; then
   "$BIN/ctsurg-grid" "$WORK/heart_nifti.h5" "$ROOT/data_samples/heart/heart_mask.nii.gz" "$WORK/grid_heart_1mm.h5" --voxel-mm 1.0 --no-preview -q
   {
     echo "## Mesh: marching cubes against VTK (\`bench/run.sh\`)"
@@ -200,6 +211,7 @@ fi
 # Spring-mass models: bench_spring_models (Google Benchmark, median of 5 repetitions) next to the
 # spring-mass papers' Table 1 (Mosegaard & Sorensen 2005, IEEE VR; the same CPU and GPU rows in Mosegaard,
 # Herborg & Sorensen 2005, MMVR).
+if want sim; then
 sim=$WORK/sim.md
 {
   echo "## Simulation: spring-mass steps per second (\`bench/run.sh\`)"
@@ -229,4 +241,70 @@ sim=$WORK/sim.md
           printf "| %s | %s | %.0f | %.0f | %.0f | %.0f |\n", label, paper[s], v[s ",i,1"], v[s ",i,2"], v[s ",e,1"], v[s ",e,2"] } }'
 } >"$sim"
 splice sim "$sim"
+fi
+# Google Benchmark CSV -> a markdown table: name, real time, and the user counters.
+gbench_table() { /usr/bin/python3 bench/gbench_table.py; }
+
+# Render: bench_render (ctsurg-render's renderer, OSMesa llvmpipe): one frame at 1024 x 1024 with the
+# normal map, a new deformation streamed each frame; Args = (thousands of faces... see bench_render.cpp).
+if want render; then
+  ren=$WORK/render.md
+  {
+    echo "## Render: frames per second at 1024 x 1024 (\`bench/run.sh render\`)"
+    echo
+    machine_line
+    echo "date: $(date -u +%Y-%m-%d); ctsurg $(git describe --always --dirty 2>/dev/null || echo unknown), Release build; Mesa llvmpipe"
+    echo "(OSMesa, OpenGL 4.5 core). \`build/bin/bench_render\`: a normal-mapped surface of the given face count, a new"
+    echo "deformation streamed every frame; arguments (ellipsoid resolution, samples per pixel, read back). Load average"
+    echo "at the start: $(cut -d' ' -f1-3 /proc/loadavg). Target: 30 frames/s for the papers' 31,320-face heart."
+    echo
+    "$BIN/bench_render" --benchmark_format=json 2>/dev/null | gbench_table
+  } >"$ren"
+  splice render "$ren"
+fi
+
+# FEM: bench_fem (static Newton solves at the FEM paper's Table 2 sizes, explicit element updates).
+if want fem; then
+  fem=$WORK/fem.md
+  {
+    echo "## FEM: static solves and explicit steps (\`bench/run.sh fem\`)"
+    echo
+    machine_line
+    echo "date: $(date -u +%Y-%m-%d); ctsurg $(git describe --always --dirty 2>/dev/null || echo unknown), Release build."
+    echo "\`build/bin/bench_fem\` (docs/fem.md explains the cases). Paper (Huang et al., Table 2, GPU): 34-62 ms per solve,"
+    echo "219-1,297 ms average per deformation step at 1,018-5,071 vertices. Load average at the start: $(cut -d' ' -f1-3 /proc/loadavg)."
+    echo
+    "$BIN/bench_fem" --benchmark_format=json 2>/dev/null | gbench_table
+  } >"$fem"
+  splice fem "$fem"
+fi
+
+# The FEM paper's kidney experiment (bench/kidney_experiment.sh; needs ../shared/data/abdomen).
+if want kidney && [[ -e $DATA/abdomen/upper_abdomen_ct.nii.gz ]]; then
+  kid=$WORK/kidney.md
+  {
+    echo "## FEM paper's experiment on a kidney (\`bench/run.sh kidney\`, \`bench/kidney_experiment.sh\`)"
+    echo
+    machine_line
+    echo "date: $(date -u +%Y-%m-%d). Right kidney of the shared abdomen sample, point force, static FEM and the"
+    echo "calibrated spring grid (docs/fem.md discusses the numbers)."
+    echo
+    bench/kidney_experiment.sh
+  } >"$kid"
+  splice kidney "$kid"
+fi
+# Time against error (issue 9; bench/time_vs_error.sh, docs/accuracy.md): every model and setting on
+# the cantilever, kidney and heart scenarios against a cached Neo-Hookean reference; the budget table.
+if want accuracy; then
+  acc=$WORK/accuracy.md
+  {
+    echo "## Time against error (\`bench/run.sh accuracy\`, \`bench/time_vs_error.sh\`)"
+    echo
+    machine_line
+    echo "date: $(date -u +%Y-%m-%d). Fastest configuration per RMS surface error budget; method, plots and"
+    echo "the full CSV: docs/accuracy.md."
+    bench/time_vs_error.sh build build/time_vs_error | sed -n '/^####/,$p'
+  } >"$acc"
+  splice accuracy "$acc"
+fi
 echo "bench/run.sh: wrote $doc"

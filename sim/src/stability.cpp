@@ -110,7 +110,8 @@ StabilityReport StabilityGuard::check(const ParticleState& s, double time, bool 
   StabilityReport r;
   r.time = time;
   const int32_t n = s.count();
-  const double limit2 = max_step_ * max_step_;
+  const double limit = max_step_ + options_.gravity * std::max(time, 0.0) * dt_;
+  const double limit2 = limit * limit;
   int32_t first = n;
   const int threads = std::clamp(n / 8192, 1, omp_get_max_threads());  // small models: one thread
 #pragma omp parallel for schedule(static) num_threads(threads) reduction(min : first)
@@ -125,7 +126,7 @@ StabilityReport StabilityGuard::check(const ParticleState& s, double time, bool 
     const double dx = double(s.x[first]) - s.px[first], dy = double(s.y[first]) - s.py[first], dz = double(s.z[first]) - s.pz[first];
     const double moved = std::sqrt(dx * dx + dy * dy + dz * dz);
     if (std::isfinite(moved))
-      cause << "moved " << moved << " mm in one step (limit " << max_step_ << " mm)";
+      cause << "moved " << moved << " mm in one step (limit " << limit << " mm)";
     else
       cause << "has a non-finite position";
   } else if (!external_work && last_energy_ >= 0 && energy > options_.energy_growth * std::max(last_energy_, options_.energy_floor)) {

@@ -87,3 +87,21 @@ TEST(Stability, EnergiesAndMomentum) {
 
 }  // namespace
 }  // namespace ctsurg::sim
+
+TEST(Stability, AFreelyFallingPieceIsNotUnstable) {
+  // A particle cut free falls: after 1 s under 9810 mm/s^2 it moves g t dt = 4.9 mm per 0.5 ms step,
+  // far more than half a 2.4 mm spring. With the run's gravity the guard allows it; without, it flags it;
+  // and a move beyond free fall is still flagged with gravity.
+  const double dt = 5e-4, g = 9810;
+  const std::vector<ctsurg::sim::Real> rest = {0, 0, 0};
+  ctsurg::sim::ParticleState s(rest, {1.0f});
+  s.z[0] = -4900.0f;
+  s.pz[0] = static_cast<ctsurg::sim::Real>(-4900.0 + g * 1.0 * dt);
+  ctsurg::sim::StabilityGuardOptions with_g;
+  with_g.gravity = g;
+  ctsurg::sim::StabilityGuard falling(rest, 2.4, dt, with_g), plain(rest, 2.4, dt);
+  EXPECT_TRUE(falling.check(s, 1.0).stable);
+  EXPECT_FALSE(plain.check(s, 1.0).stable);
+  s.pz[0] = static_cast<ctsurg::sim::Real>(-4900.0 + 2 * g * 1.0 * dt);
+  EXPECT_FALSE(falling.check(s, 1.0).stable);
+}

@@ -53,6 +53,8 @@ struct StabilityGuardOptions {
                                  // rest length (a stable run near dt_crit moves far less)
   double energy_growth = 100;    // largest kinetic-energy ratio between consecutive checks
   double energy_floor = 1e-6;    // nJ; growth from below this is not counted (a body at rest)
+  double gravity = 0;            // mm/s^2, |g| of the run: a piece cut free falls, and by time t it may
+                                 // move g t dt per step without being unstable; the step limit grows by that
 };
 
 struct StabilityReport {

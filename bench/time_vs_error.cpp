@@ -1,0 +1,523 @@
+// Time against error (issue 9): the same physical scenario run with every model and setting a user
+// can pick (implicit-grid springs, explicit springs from the tet mesh, linear / StVK / Neo-Hookean FEM,
+// static and dynamic, several grid and mesh resolutions, two time-step safety factors), each timed and
+// compared with a reference:
+//
+//   cantilever  a 40 x 8 x 8 mm bar clamped at x = 0, a 1 mN tip force (-z); reference: Euler-Bernoulli
+//               (w(x) = F x^2 (3L - x) / (6 E I), u_x = -(z - zc) w'(x)) and the Neo-Hookean static
+//               solution on the finest mesh;
+//   kidney      the right kidney of the upper-abdomen sample, posterior fifth fixed, a point force on
+//               the anterior surface (the FEM paper's experiment); reference: Neo-Hookean static on the
+//               finest mesh (levels: one folder per resolution, made by bench/time_vs_error.sh);
+//   heart       the bundled heart, base fixed, apex grabbed and pulled (heart_grab.yaml's tool, held).
+//
+// Error: the displacement of the reference's rest surface vertices (the finest level's marching-cubes
+// surface), each run's displacement carried there from its own surface by inverse-distance weights of
+// the 4 nearest rest vertices; RMS and max over the vertices, mm. Spring models and dynamic FEM reach
+// equilibrium by damped dynamics: every output frame gives a point of the time-to-error curve (wall
+// time of the loop up to that frame, assumed proportional to simulated time). Static FEM: one solve.
+//
+// Outputs in OUT: runs.csv (one row per configuration: final error, wall time, volume change),
+// curves.csv (error per frame), pareto_<scenario>.png (wall time against final RMS error, log-log, one
+// mark per configuration, the Pareto front joined), budgets.md (per scenario and error budget, the
+// configuration that reaches it first), reference_<scenario>.bin (the cached reference displacements).
+//
+//   time_vs_error --inputs DIR --out DIR [--scenarios cantilever,kidney,heart] [--quick]
+//
+// DIR holds kidney/v<h>/ and heart/v<h>/ folders with grid.h5, surface.h5, tetmesh.h5 (made by the .sh);
+// the cantilever's inputs are generated here.
+#include "ctsurg/core/error.h"
+#include "ctsurg/core/occupancy_grid_file.h"
+#include "ctsurg/core/surface_mesh_file.h"
+#include "ctsurg/core/tet_mesh_file.h"
+#include "ctsurg/core/volume.h"
+#include "ctsurg/mesh/lattice_padding.h"
+#include "ctsurg/mesh/marching_cubes.h"
+#include "ctsurg/sim/fem_box_mesh.h"
+#include "ctsurg/sim/scenario.h"
+#include "ctsurg/sim/scenario_run.h"
+
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <iostream>
+#include <limits>
+#include <map>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace fs = std::filesystem;
+using namespace ctsurg;
+using namespace ctsurg::sim;
+
+namespace {
+
+struct Level {
+  double h = 0;  // mm, grid cell and tet size
+  fs::path dir;  // grid.h5, surface.h5, tetmesh.h5 (and surface_fem.h5 for the cantilever)
+};
+
+struct Spec {
+  std::string name;
+  std::vector<Level> levels;  // coarse to fine; the last is the reference's
+  std::string material, fixed, tools;
+  double duration = 0;        // s, dynamic runs
+  double damping = 0;         // 1/s, mass-proportional (about twice the lowest mode's angular frequency)
+  bool cantilever = false;
+};
+
+struct Config {
+  std::string model;   // spring_grid | explicit_springs | fem_linear | fem_stvk | fem_neo_hookean
+  bool dynamic = true;
+  double safety = 0.5;
+  const Level* level = nullptr;
+  std::string label() const {
+    std::ostringstream s;
+    s << model << (model.rfind("fem", 0) == 0 ? (dynamic ? " dyn" : " static") : "") << " h" << level->h;
+    if (dynamic) s << " sf" << safety;
+    return s.str();
+  }
+};
+
+Provenance bench_provenance() { return {"time_vs_error", "0", {}, {}, nlohmann::json::array()}; }
+
+// The cantilever's inputs at cell size h: an occupancy block of x in [-h, 40] (the first layer, x < 0,
+// is fixed: the clamp), y, z in [0, 8], its surface; the surface of x in [0, 40] for the tet models;
+// a Kuhn tet mesh of [0, 40] x [0, 8] x [0, 8].
+void write_cantilever(const Level& l) {
+  fs::create_directories(l.dir);
+  const int n = static_cast<int>(std::lround(8 / l.h)), nx = static_cast<int>(std::lround(40 / l.h));
+  for (int stub = 1; stub >= 0; --stub) {
+    ImageGeometry g;
+    g.dims = {nx + stub + 2, n + 2, n + 2};
+    g.spacing = Eigen::Vector3d(l.h, l.h, l.h);
+    g.origin = Eigen::Vector3d(-stub * l.h - 0.5 * l.h, -0.5 * l.h, -0.5 * l.h);
+    OccupancyGrid grid;
+    grid.occupancy = Volume<uint8_t>(g, 0);
+    for (int k = 1; k <= n; ++k)
+      for (int j = 1; j <= n; ++j)
+        for (int i = 1; i <= nx + stub; ++i) grid.occupancy(i, j, k) = 1;
+    grid.fraction = Volume<float>(g, 0.f);
+    grid.label = Volume<uint16_t>(g, 0);
+    for (size_t i = 0; i < grid.occupancy.voxels.size(); ++i) {
+      grid.fraction.voxels[i] = grid.occupancy.voxels[i] ? 1.f : 0.f;
+      grid.label.voxels[i] = grid.occupancy.voxels[i];
+    }
+    grid.mask = grid.label;
+    grid.label_names = {{1, "bar"}};
+    const SurfaceMesh s = marching_cubes(pad_lattice(grid.fraction, 0.f, 1), 0.5);
+    if (stub) {
+      write_occupancy_grid_file(l.dir / "grid.h5", grid, bench_provenance());
+      write_surface_mesh_file(l.dir / "surface.h5", s, bench_provenance());
+    } else {
+      write_surface_mesh_file(l.dir / "surface_fem.h5", s, bench_provenance());
+    }
+  }
+  const FemBoxMesh box = fem_box_mesh({nx, n, n}, {40, 8, 8});
+  TetMesh m;
+  m.nodes = box.nodes;
+  m.tets = box.tets;
+  m.tet_labels.assign(box.tets.size() / 4, 1);
+  m.quality.radius_edge_bin_edges = {0, 1};
+  m.quality.radius_edge_histogram = {static_cast<int64_t>(m.tet_labels.size())};
+  write_tet_mesh_file(l.dir / "tetmesh.h5", m, bench_provenance());
+}
+
+std::string scenario_text(const Spec& sp, const Config& c) {
+  std::ostringstream s;
+  s << "ctsurg_scenario: 1\nmodel:\n";
+  const bool fem = c.model.rfind("fem", 0) == 0;
+  if (c.model == "spring_grid") s << "  kind: spring_grid\n  grid: grid.h5\n  surface: surface.h5\n";
+  if (c.model == "explicit_springs")
+    s << "  kind: explicit_springs\n  springs_from: tetmesh\n  grid: grid.h5\n  tetmesh: tetmesh.h5\n  surface: "
+      << (sp.cantilever ? "surface_fem.h5" : "surface.h5") << "\n";
+  if (fem)
+    s << "  kind: fem\n  tetmesh: tetmesh.h5\n  surface: " << (sp.cantilever ? "surface_fem.h5" : "surface.h5")
+      << "\n  material_law: " << c.model.substr(4) << "\n  solver: " << (c.dynamic ? "dynamic" : "static") << "\n";
+  s << "material:\n" << sp.material << "  damping_per_s: " << sp.damping << "\n" << sp.fixed << sp.tools;
+  const double duration = c.dynamic ? sp.duration : 0.1;
+  s << "time:\n  duration_s: " << duration << "\n  safety_factor: " << c.safety << "\n";
+  s << "output:\n  trajectory: unused.h5\n  frame_interval_s: " << (c.dynamic ? duration / 40 : duration) << "\n";
+  return s.str();
+}
+
+// The 4 nearest rest vertices of `from` for every point of `to` and their inverse-distance weights.
+struct Transfer {
+  std::vector<int32_t> index;  // #to x 4
+  std::vector<double> weight;  // #to x 4
+};
+
+Transfer make_transfer(const std::vector<float>& from, const std::vector<double>& to) {
+  Transfer t;
+  const size_t nf = from.size() / 3, nt = to.size() / 3;
+  t.index.resize(4 * nt);
+  t.weight.resize(4 * nt);
+  // Uniform bucket grid over `from`.
+  double lo[3] = {1e30, 1e30, 1e30}, hi[3] = {-1e30, -1e30, -1e30};
+  for (size_t i = 0; i < nf; ++i)
+    for (int c = 0; c < 3; ++c) lo[c] = std::min(lo[c], double(from[3 * i + c])), hi[c] = std::max(hi[c], double(from[3 * i + c]));
+  const double cell = 2.0;
+  int dims[3];
+  for (int c = 0; c < 3; ++c) dims[c] = std::max(1, static_cast<int>((hi[c] - lo[c]) / cell) + 1);
+  auto key = [&](int a, int b, int d) { return (static_cast<int64_t>(d) * dims[1] + b) * dims[0] + a; };
+  std::vector<std::vector<int32_t>> buckets(static_cast<size_t>(dims[0]) * dims[1] * dims[2]);
+  auto coord = [&](double v, int c) { return std::clamp(static_cast<int>((v - lo[c]) / cell), 0, dims[c] - 1); };
+  for (size_t i = 0; i < nf; ++i)
+    buckets[static_cast<size_t>(key(coord(from[3 * i], 0), coord(from[3 * i + 1], 1), coord(from[3 * i + 2], 2)))].push_back(static_cast<int32_t>(i));
+  for (size_t p = 0; p < nt; ++p) {
+    std::array<std::pair<double, int32_t>, 4> best;
+    best.fill({1e300, 0});
+    const int ci[3] = {coord(to[3 * p], 0), coord(to[3 * p + 1], 1), coord(to[3 * p + 2], 2)};
+    for (int r = 0;; ++r) {
+      for (int d = ci[2] - r; d <= ci[2] + r; ++d)
+        for (int b = ci[1] - r; b <= ci[1] + r; ++b)
+          for (int a = ci[0] - r; a <= ci[0] + r; ++a) {
+            if (std::max({std::abs(a - ci[0]), std::abs(b - ci[1]), std::abs(d - ci[2])}) != r) continue;
+            if (a < 0 || b < 0 || d < 0 || a >= dims[0] || b >= dims[1] || d >= dims[2]) continue;
+            for (const int32_t i : buckets[static_cast<size_t>(key(a, b, d))]) {
+              double d2 = 0;
+              for (int c = 0; c < 3; ++c) d2 += (from[3 * i + c] - to[3 * p + c]) * (from[3 * i + c] - to[3 * p + c]);
+              if (d2 < best[3].first) {
+                best[3] = {d2, i};
+                std::sort(best.begin(), best.end());
+              }
+            }
+          }
+      // Every vertex within r cells is seen; stop when the 4th nearest is nearer than that.
+      if (best[3].first < (r * cell) * (r * cell) || r > std::max({dims[0], dims[1], dims[2]})) break;
+    }
+    double sum = 0;
+    for (int k = 0; k < 4; ++k) sum += 1 / (std::sqrt(best[k].first) + 1e-6);
+    for (int k = 0; k < 4; ++k) {
+      t.index[4 * p + k] = best[k].second;
+      t.weight[4 * p + k] = 1 / (std::sqrt(best[k].first) + 1e-6) / sum;
+    }
+  }
+  return t;
+}
+
+// Displacements (#to x 3) of the frame `f` of `traj` carried to the transfer's points.
+std::vector<double> carried_displacement(const Trajectory& traj, int64_t f, const Transfer& t) {
+  const float* x = traj.frame_vertices(f);
+  std::vector<double> u(t.index.size() / 4 * 3, 0.0);
+  for (size_t p = 0; p < t.index.size() / 4; ++p)
+    for (int k = 0; k < 4; ++k) {
+      const size_t i = static_cast<size_t>(t.index[4 * p + k]);
+      for (int c = 0; c < 3; ++c) u[3 * p + c] += t.weight[4 * p + k] * (double(x[3 * i + c]) - traj.rest_vertices[3 * i + c]);
+    }
+  return u;
+}
+
+struct Error {
+  double rms = 0, max = 0;
+};
+Error error_of(const std::vector<double>& u, const std::vector<double>& ref, const std::vector<uint8_t>& use) {
+  Error e;
+  double sum = 0;
+  int64_t n = 0;
+  for (size_t p = 0; p < ref.size() / 3; ++p) {
+    if (!use[p]) continue;
+    double d2 = 0;
+    for (int c = 0; c < 3; ++c) d2 += (u[3 * p + c] - ref[3 * p + c]) * (u[3 * p + c] - ref[3 * p + c]);
+    sum += d2, ++n;
+    e.max = std::max(e.max, std::sqrt(d2));
+  }
+  e.rms = std::sqrt(sum / std::max<int64_t>(n, 1));
+  return e;
+}
+
+struct Result {
+  Config config;
+  std::string label;
+  int64_t nodes = 0;
+  double dt = 0, wall = 0;
+  int64_t steps = 0;
+  Error err, analytic;
+  double volume_change = 0;
+  bool ok = false;
+  std::string failure;
+  std::vector<double> curve_wall, curve_rms, curve_max, curve_time;
+};
+
+// Pareto plot: wall time (x, log) against final RMS error (y, log), colour per model, front joined.
+void pareto_png(const std::string& title, const std::vector<Result>& rs, const fs::path& path) {
+  const int W = 720, H = 480, L = 70, R = 190, T = 30, B = 50;
+  cv::Mat img(H, W, CV_8UC3, cv::Scalar(255, 255, 255));
+  double x0 = 1e30, x1 = 0, y0 = 1e30, y1 = 0;
+  for (const auto& r : rs)
+    if (r.ok) x0 = std::min(x0, r.wall), x1 = std::max(x1, r.wall), y0 = std::min(y0, std::max(r.err.rms, 1e-3)), y1 = std::max(y1, r.err.rms);
+  x0 = std::pow(10, std::floor(std::log10(x0))), x1 = std::pow(10, std::ceil(std::log10(x1)));
+  y0 = std::pow(10, std::floor(std::log10(y0))), y1 = std::pow(10, std::ceil(std::log10(y1)));
+  auto px = [&](double x) { return L + (W - L - R) * (std::log10(x) - std::log10(x0)) / (std::log10(x1) - std::log10(x0)); };
+  auto py = [&](double y) { return H - B - (H - B - T) * (std::log10(std::max(y, 1e-3)) - std::log10(y0)) / (std::log10(y1) - std::log10(y0)); };
+  const cv::Scalar black(0, 0, 0), grey(200, 200, 200);
+  for (double x = x0; x <= x1 * 1.001; x *= 10) {
+    cv::line(img, {int(px(x)), T}, {int(px(x)), H - B}, grey);
+    std::ostringstream s;
+    s << x;
+    cv::putText(img, s.str(), {int(px(x)) - 12, H - B + 18}, cv::FONT_HERSHEY_SIMPLEX, 0.4, black);
+  }
+  for (double y = y0; y <= y1 * 1.001; y *= 10) {
+    cv::line(img, {L, int(py(y))}, {W - R, int(py(y))}, grey);
+    std::ostringstream s;
+    s << y;
+    cv::putText(img, s.str(), {8, int(py(y)) + 4}, cv::FONT_HERSHEY_SIMPLEX, 0.4, black);
+  }
+  cv::rectangle(img, {L, T}, {W - R, H - B}, black);
+  cv::putText(img, "wall time, s", {(W - R) / 2, H - 12}, cv::FONT_HERSHEY_SIMPLEX, 0.45, black);
+  cv::putText(img, "surface RMS error, mm", {8, 18}, cv::FONT_HERSHEY_SIMPLEX, 0.45, black);
+  cv::putText(img, title, {L + 150, 18}, cv::FONT_HERSHEY_SIMPLEX, 0.5, black);
+  const std::map<std::string, cv::Scalar> colour{{"spring_grid", {200, 80, 0}}, {"explicit_springs", {0, 160, 0}},
+                                                {"fem_linear", {0, 140, 255}}, {"fem_stvk", {180, 0, 180}},
+                                                {"fem_neo_hookean", {0, 0, 220}}};
+  // Front: sorted by time, keep the points with an error below every faster one.
+  std::vector<const Result*> ok;
+  for (const auto& r : rs)
+    if (r.ok) ok.push_back(&r);
+  std::sort(ok.begin(), ok.end(), [](auto a, auto b) { return a->wall < b->wall; });
+  std::vector<cv::Point> front;
+  double best = 1e30;
+  for (const auto* r : ok)
+    if (r->err.rms < best) best = r->err.rms, front.push_back({int(px(r->wall)), int(py(r->err.rms))});
+  for (size_t i = 1; i < front.size(); ++i) cv::line(img, front[i - 1], front[i], black, 2);
+  for (const auto* r : ok) {
+    const cv::Point p{int(px(r->wall)), int(py(r->err.rms))};
+    const cv::Scalar c = colour.at(r->config.model);
+    if (r->config.dynamic)
+      cv::circle(img, p, 5, c, -1);
+    else
+      cv::rectangle(img, p - cv::Point(5, 5), p + cv::Point(5, 5), c, -1);
+  }
+  int ly = T + 10;
+  for (const auto& [m, c] : colour) {
+    cv::circle(img, {W - R + 15, ly}, 5, c, -1);
+    cv::putText(img, m, {W - R + 25, ly + 4}, cv::FONT_HERSHEY_SIMPLEX, 0.4, black);
+    ly += 18;
+  }
+  cv::putText(img, "dot: dynamic", {W - R + 10, ly + 10}, cv::FONT_HERSHEY_SIMPLEX, 0.4, black);
+  cv::putText(img, "square: static", {W - R + 10, ly + 28}, cv::FONT_HERSHEY_SIMPLEX, 0.4, black);
+  cv::putText(img, "line: Pareto front", {W - R + 10, ly + 46}, cv::FONT_HERSHEY_SIMPLEX, 0.4, black);
+  cv::imwrite(path.string(), img);
+}
+
+// The earliest wall time after which the run's RMS error stays within `budget`, or -1.
+double time_to_error(const Result& r, double budget) {
+  double t = -1;
+  for (size_t i = r.curve_rms.size(); i-- > 0;) {
+    if (r.curve_rms[i] > budget) break;
+    t = r.curve_wall[i];
+  }
+  return t;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  fs::path inputs, out;
+  std::string which = "cantilever,kidney,heart";
+  bool quick = false;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a == "--inputs" && i + 1 < argc) inputs = argv[++i];
+    else if (a == "--out" && i + 1 < argc) out = argv[++i];
+    else if (a == "--scenarios" && i + 1 < argc) which = argv[++i];
+    else if (a == "--quick") quick = true;
+    else {
+      std::cerr << "usage: time_vs_error --inputs DIR --out DIR [--scenarios cantilever,kidney,heart] [--quick]\n";
+      return 2;
+    }
+  }
+  if (out.empty()) {
+    std::cerr << "time_vs_error: --out is required\n";
+    return 2;
+  }
+  fs::create_directories(out);
+  std::vector<Spec> specs;
+  if (which.find("cantilever") != std::string::npos) {
+    Spec s;
+    s.name = "cantilever";
+    s.cantilever = true;
+    for (const double h : quick ? std::vector<double>{4, 2, 1.6} : std::vector<double>{4, 2, 1.6, 1.3333333, 1})
+      s.levels.push_back({h, out / "inputs" / "cantilever" / ("h" + std::to_string(h).substr(0, 4))});
+    s.material = "  youngs_modulus_pa: 30000\n  poisson_ratio: 0.3\n";
+    s.fixed = "fixed:\n  - box: {min: [-10, -1, -1], max: [0.01, 9, 9]}\n";
+    s.tools = "tools:\n  - force:\n      radius_mm: 4.5\n      force_n: [0, 0, -0.001]\n      path:\n        - {t: 0, position_mm: [40, 4, 4]}\n";
+    s.duration = 0.5;
+    s.damping = 50;
+    specs.push_back(s);
+  }
+  auto organ_levels = [&](const std::string& organ, std::vector<std::string> names) {
+    std::vector<Level> ls;
+    for (const auto& n : names) ls.push_back({std::stod(n), inputs / organ / ("v" + n)});
+    return ls;
+  };
+  if (which.find("kidney") != std::string::npos) {
+    Spec s;
+    s.name = "kidney";
+    s.levels = organ_levels("kidney", quick ? std::vector<std::string>{"6", "4.5", "3"} : std::vector<std::string>{"6", "4.5", "3", "2.25", "1.8"});
+    s.material = "  youngs_modulus_pa: 10000\n  poisson_ratio: 0.45\n  density_g_per_cm3: 1.05\n";
+    s.fixed = "fixed:\n  - box_fraction: {min: [0, 0.8, 0], max: [1, 1, 1]}\n";
+    s.tools = "tools:\n  - force:\n      radius_mm: 6\n      snap_to_tissue: true\n      force_n: [0, 0.2, 0]\n      path:\n"
+              "        - {t: 0, at_fraction: [0.5, 0.0, 0.5]}\n";
+    s.duration = 0.4;
+    s.damping = 100;
+    specs.push_back(s);
+  }
+  if (which.find("heart") != std::string::npos) {
+    Spec s;
+    s.name = "heart";
+    s.levels = organ_levels("heart", {"7.2", "4.8", "3.6"});
+    s.material = "  youngs_modulus_pa: 30000\n  poisson_ratio: 0.45\n  density_g_per_cm3: 1.06\n";
+    s.fixed = "fixed:\n  - box_fraction: {min: [0, 0, 0.85], max: [1, 1, 1]}\n";
+    s.tools = "tools:\n  - grab:\n      radius_mm: 8\n      snap_to_tissue: true\n      path:\n"
+              "        - {t: 0, at_fraction: [0.75, 0.0, 0.2]}\n        - {t: 0.05, offset_mm: [5, -12.5, -5]}\n";
+    s.duration = 0.4;
+    s.damping = 60;
+    specs.push_back(s);
+  }
+
+  std::ofstream runs(out / "runs.csv"), curves(out / "curves.csv"), budgets(out / "budgets.md");
+  runs << "scenario,configuration,model,solver,level_mm,surface_vertices,dt_s,safety,steps,wall_s,rms_mm,max_mm,"
+          "volume_change_pct,analytic_rms_mm,analytic_max_mm,status\n";
+  curves << "scenario,configuration,sim_time_s,wall_s,rms_mm,max_mm\n";
+  const std::vector<double> budget_list{0.05, 0.1, 0.25, 0.5, 1.0, 2.0};
+
+  for (const Spec& sp : specs) {
+    if (sp.cantilever)
+      for (const auto& l : sp.levels) write_cantilever(l);
+    const Level& fine = sp.levels.back();
+    // Reference points: the finest level's rest surface (for the cantilever the tet models' surface,
+    // x >= 0). Reference displacements: Neo-Hookean static there, cached.
+    const SurfaceMesh ref_surface = read_surface_mesh_file(fine.dir / (sp.cantilever ? "surface_fem.h5" : "surface.h5"));
+    std::vector<double> ref_points(ref_surface.vertices.begin(), ref_surface.vertices.end());
+    const size_t np = ref_points.size() / 3;
+    std::vector<uint8_t> use(np, 1);
+    const fs::path cache = out / ("reference_" + sp.name + ".bin");
+    std::vector<double> ref_u(3 * np);
+    Config refc{"fem_neo_hookean", false, 0.5, &fine};
+    bool cached = false;
+    if (std::ifstream in{cache, std::ios::binary}) {
+      uint64_t n = 0;
+      in.read(reinterpret_cast<char*>(&n), sizeof n);
+      if (n == np) {
+        in.read(reinterpret_cast<char*>(ref_u.data()), static_cast<std::streamsize>(8 * ref_u.size()));
+        cached = bool(in);
+      }
+    }
+    if (!cached) {
+      std::cerr << sp.name << ": reference (Neo-Hookean static, h " << fine.h << ")...\n";
+      const Scenario s = parse_scenario(scenario_text(sp, refc), fine.dir / "reference.yaml", fine.dir);
+      const Trajectory t = run_scenario(s);
+      const float* x = t.frame_vertices(t.frame_count() - 1);
+      for (size_t i = 0; i < 3 * np; ++i) ref_u[i] = double(x[i]) - t.rest_vertices[i];
+      std::ofstream o(cache, std::ios::binary);
+      const uint64_t n = np;
+      o.write(reinterpret_cast<const char*>(&n), sizeof n);
+      o.write(reinterpret_cast<const char*>(ref_u.data()), static_cast<std::streamsize>(8 * ref_u.size()));
+    }
+    // Cantilever: Euler-Bernoulli displacements at the same points.
+    std::vector<double> analytic;
+    if (sp.cantilever) {
+      const double F = -1000, E = 30000, I = 8.0 * 8 * 8 * 8 / 12, Lb = 40, zc = 4;  // uN, Pa, mm^4, mm
+      for (size_t p = 0; p < np; ++p) {
+        const double x = ref_points[3 * p], z = ref_points[3 * p + 2];
+        const double w = F * x * x * (3 * Lb - x) / (6 * E * I), dw = F * x * (2 * Lb - x) / (2 * E * I);
+        analytic.insert(analytic.end(), {-(z - zc) * dw, 0.0, w});
+      }
+      const Error e = error_of(ref_u, analytic, use);
+      std::cerr << "cantilever: reference vs Euler-Bernoulli: RMS " << e.rms << " mm, max " << e.max << " mm\n";
+    }
+
+    std::vector<Config> configs;
+    for (const auto& l : sp.levels) {
+      for (const double sf : {0.5, 0.9}) configs.push_back({"spring_grid", true, sf, &l});
+      configs.push_back({"explicit_springs", true, 0.5, &l});
+      for (const std::string law : {"fem_linear", "fem_stvk", "fem_neo_hookean"}) configs.push_back({law, false, 0.5, &l});
+      // Explicit FEM on the finest levels is the slowest configuration by far (its step follows the
+      // smallest tet altitude); the two coarsest levels show its trend.
+      if (&l - sp.levels.data() < 3)
+        for (const double sf : {0.5, 0.9}) configs.push_back({"fem_neo_hookean", true, sf, &l});
+    }
+    std::vector<Result> results;
+    for (const Config& c : configs) {
+      Result r;
+      r.config = c;
+      r.label = c.label();
+      std::cerr << sp.name << ": " << r.label << " ... " << std::flush;
+      try {
+        const Scenario s = parse_scenario(scenario_text(sp, c), c.level->dir / "run.yaml", c.level->dir);
+        RunReport rep;
+        const Trajectory t = run_scenario(s, &rep);
+        const Transfer tr = make_transfer(t.rest_vertices, ref_points);
+        r.nodes = t.vertex_count();
+        r.dt = rep.dt_s;
+        r.steps = rep.steps;
+        r.wall = rep.wall_s;
+        for (int64_t f = 1; f < t.frame_count(); ++f) {
+          const auto u = carried_displacement(t, f, tr);
+          const Error e = error_of(u, ref_u, use);
+          r.curve_time.push_back(t.time[static_cast<size_t>(f)]);
+          r.curve_wall.push_back(rep.wall_s * t.time[static_cast<size_t>(f)] / t.time.back());
+          r.curve_rms.push_back(e.rms);
+          r.curve_max.push_back(e.max);
+          if (f == t.frame_count() - 1) {
+            r.err = e;
+            if (sp.cantilever) r.analytic = error_of(u, analytic, use);
+          }
+        }
+        const auto& vol = t.metric("enclosed_volume")->values;
+        r.volume_change = 100 * (vol.back() / vol.front() - 1);
+        r.ok = true;
+        std::cerr << r.wall << " s, RMS " << r.err.rms << " mm\n";
+      } catch (const std::exception& e) {
+        r.failure = e.what();
+        std::cerr << "failed: " << r.failure << "\n";
+      }
+      runs << sp.name << "," << r.label << "," << c.model << "," << (c.dynamic ? "dynamic" : "static") << "," << c.level->h << ","
+           << r.nodes << "," << r.dt << "," << c.safety << "," << r.steps << "," << r.wall << "," << r.err.rms << "," << r.err.max
+           << "," << r.volume_change << "," << (sp.cantilever ? r.analytic.rms : NAN) << "," << (sp.cantilever ? r.analytic.max : NAN)
+           << "," << (r.ok ? "ok" : "failed") << "\n";
+      for (size_t i = 0; i < r.curve_rms.size(); ++i)
+        curves << sp.name << "," << r.label << "," << r.curve_time[i] << "," << r.curve_wall[i] << "," << r.curve_rms[i] << ","
+               << r.curve_max[i] << "\n";
+      runs.flush(), curves.flush();
+      results.push_back(std::move(r));
+    }
+    pareto_png(sp.name + ": wall time vs error", results, out / ("pareto_" + sp.name + ".png"));
+    // The budget table: for each budget, the configuration that reaches it (RMS, and staying there) first.
+    budgets << "\n#### " << sp.name << " (reference: Neo-Hookean static, h " << fine.h << " mm"
+            << (sp.cantilever ? "; Euler-Bernoulli in runs.csv" : "") << ")\n\n"
+            << "| RMS error budget | fastest configuration | time to reach it | its final RMS / max | runner-up |\n|---:|---|---:|---|---|\n";
+    for (const double b : budget_list) {
+      std::vector<std::pair<double, const Result*>> reach;
+      for (const auto& r : results)
+        if (r.ok && r.config.level != &fine)  // the reference's own configuration is excluded
+          if (const double t = time_to_error(r, b); t >= 0) reach.push_back({t, &r});
+      std::sort(reach.begin(), reach.end(), [](auto a, auto c) { return a.first < c.first; });
+      budgets << "| " << b << " mm | ";
+      if (reach.empty()) {
+        budgets << "none | | | |\n";
+        continue;
+      }
+      char buf[256];
+      std::snprintf(buf, sizeof buf, "%s | %.3g s | %.3g / %.3g mm | ", reach[0].second->label.c_str(), reach[0].first,
+                    reach[0].second->err.rms, reach[0].second->err.max);
+      budgets << buf;
+      if (reach.size() > 1) {
+        std::snprintf(buf, sizeof buf, "%s (%.3g s)", reach[1].second->label.c_str(), reach[1].first);
+        budgets << buf;
+      }
+      budgets << " |\n";
+    }
+    budgets.flush();
+  }
+  return 0;
+}
