@@ -267,7 +267,9 @@ Trajectory run_scenario(const Scenario& s, RunReport* report_out, const std::fun
     traj.blades.resize(frames * static_cast<size_t>(blade_tools) * 7);
   };
 
-  StabilityGuard guard = std::visit([&](const auto& m) { return make_stability_guard(m, dt); }, model);
+  StabilityGuardOptions guard_options;
+  guard_options.gravity = std::sqrt(s.gravity[0] * s.gravity[0] + s.gravity[1] * s.gravity[1] + s.gravity[2] * s.gravity[2]);
+  StabilityGuard guard = std::visit([&](const auto& m) { return make_stability_guard(m, dt, guard_options); }, model);
   StepParameters params;
   params.dt = dt;
   params.damping = std::min(0.99, s.damping_per_s * dt);
@@ -444,7 +446,7 @@ Trajectory run_scenario(const Scenario& s, RunReport* report_out, const std::fun
         dt /= 2;
         params.dt = dt;
         params.damping = std::min(0.99, s.damping_per_s * dt);
-        guard = std::visit([&](const auto& m) { return make_stability_guard(m, dt); }, model);
+        guard = std::visit([&](const auto& m) { return make_stability_guard(m, dt, guard_options); }, model);
         ++halvings;
         tool_work = true;  // the restart changes the energy the guard last saw
         report.notes.push_back("unstable at t = " + std::to_string(check.time) + " s: restarted from t = " + std::to_string(t) +
