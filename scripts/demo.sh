@@ -1,8 +1,12 @@
 #!/usr/bin/env bash
-# The main job in one command: install dependencies, build, and run the CT-to-scenario pipeline on
-# the bundled heart sample (data_samples/heart). Results go to build/demo/heart/.
+# The main job in one command: install dependencies, build, and run the pipeline on the bundled heart
+# (data_samples/patients/heart): CT -> HU volume -> grid -> surface -> normal map -> the heart scenarios'
+# trajectories -> pictures. Results go to build/demo/heart/; the last lines say what is where.
+# CTSURG_JOBS sets make's -j (default 2).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 scripts/install-deps.sh
 scripts/build.sh
-make --no-print-directory -f scripts/Makefile demo
+make --no-print-directory -f scripts/Makefile -j"${CTSURG_JOBS:-2}" demo
+echo
+cat build/demo/heart/results.txt

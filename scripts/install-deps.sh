@@ -13,6 +13,8 @@ packages=(
   # tests and benchmarks; dcm2niix, python3-nibabel/vtk9 and tetgen are the peers we validate against
   libgtest-dev libgmock-dev libbenchmark-dev dcm2niix libgdcm-tools python3 python3-numpy python3-nibabel
   python3-vtk9 python3-h5py time tetgen
+  # the pipeline's scale-out path (scripts/Snakefile, docs/pipeline.md) and its test
+  snakemake
 )
 
 missing=()

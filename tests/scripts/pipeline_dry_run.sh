@@ -1,0 +1,62 @@
+#!/usr/bin/env bash
+# Dry runs (make -n) per scenario kind: the pipeline runs exactly the tools the scene needs.
+# Usage: pipeline_dry_run.sh ROOT BIN WORK
+ROOT=$1 BIN=$2 WORK=$3
+source "$(dirname "$0")/pipeline_test_lib.sh"
+rm -rf "$WORK" && mkdir -p "$WORK/patients"
+
+# One patient per scene kind, all on the same phantom CT.
+for p in springs fem rendered explicit; do phantom_ct "$WORK/patients/$p"; done
+scenario "$WORK/patients/springs/scenarios/springs.yaml" spring_grid surface.h5 no
+scenario "$WORK/patients/fem/scenarios/fem.yaml" fem "" no
+scenario "$WORK/patients/rendered/scenarios/rendered.yaml" spring_grid surface_textured.h5 yes
+scenario "$WORK/patients/explicit/scenarios/explicit.yaml" explicit_springs "" no
+
+plan() { # plan PATIENT: the tools a dry run of that patient would run, one per line
+  mk -n "$1" PATIENTS_DIR="$WORK/patients" OUT="$WORK/out" > "$WORK/$1.plan"
+  grep -o 'ctsurg-[a-z]*\|compare-table\|results.sh' "$WORK/$1.plan" | sort -u | tr '\n' ' '
+}
+expect() { # expect PATIENT "TOOLS..." : exactly these tools
+  local got want
+  got=$(plan "$1")
+  want=$(echo "$2" | tr ' ' '\n' | sort -u | tr '\n' ' ')
+  [[ "$got" == "$want" ]] || { cat "$WORK/$1.plan" >&2; fail "$1: ran [$got], expected [$want]"; }
+  echo "ok: $1 scene runs: $got"
+}
+
+# Spring grid, no pictures: no tet mesh, no normal map, no render.
+expect springs "ctsurg-import ctsurg-grid ctsurg-surface ctsurg-sim results.sh"
+# FEM only, no surface, no pictures: no surface, no normal map, no render. The grid stays: ctsurg-tetmesh
+# meshes the grid file's full-resolution mask.
+expect fem "ctsurg-import ctsurg-grid ctsurg-tetmesh ctsurg-sim results.sh"
+# Rendered scene: the normal map is built and the picture rendered; still no tet mesh.
+expect rendered "ctsurg-import ctsurg-grid ctsurg-surface ctsurg-normalmap ctsurg-sim ctsurg-render results.sh"
+# Explicit springs from the grid without a surface: import, grid, sim only.
+expect explicit "ctsurg-import ctsurg-grid ctsurg-sim results.sh"
+
+# Only the requested outputs: the rendered scene's one picture, the right file names.
+grep -q -- "-o $WORK/out/rendered/rendered_picture.png" "$WORK/rendered.plan" || fail "rendered: picture target"
+grep -q -- "--surface $WORK/out/rendered/surface_textured.h5" "$WORK/rendered.plan" || fail "rendered: textured surface"
+grep -q -- "--tetmesh $WORK/out/fem/tetmesh.h5" "$WORK/fem.plan" || fail "fem: tet mesh passed to ctsurg-sim"
+if grep -q -- "--grid" "$WORK/fem.plan"; then fail "fem: ctsurg-sim was given a grid"; fi
+# The fragments are atomic and regenerated only from the scenario and the tool.
+[[ -f "$WORK/out/springs/mk/springs.mk" ]] || fail "no fragment written"
+ls "$WORK"/out/*/mk/*.tmp* 2>/dev/null && fail "temporary fragment left behind"
+
+# The bundled patients plan as documented (the heart's scenarios never need a tet mesh).
+got=$(mk -n heart PATIENTS_DIR="$ROOT/data_samples/patients" OUT="$WORK/bundled" | grep -o 'ctsurg-[a-z]*' | sort -u | tr '\n' ' ')
+[[ "$got" == "ctsurg-grid ctsurg-import ctsurg-normalmap ctsurg-render ctsurg-sim ctsurg-surface " ]] || fail "heart: [$got]"
+echo "ok: heart plan: $got"
+# The batch's other patients read ../shared/data: the kidney needs the tet mesh (FEM) and the table,
+# the head (a spring grid without pictures) neither a normal map nor a tet mesh nor a render.
+if [[ -f "$ROOT/../shared/data/abdomen/upper_abdomen_ct.nii.gz" && -f "$ROOT/../shared/data/headsq/quarter.nhdr" ]]; then
+  got=$(mk -n kidney PATIENTS_DIR="$ROOT/data_samples/patients" OUT="$WORK/bundled" | grep -o 'ctsurg-[a-z]*\|compare-table' | sort -u | tr '\n' ' ')
+  [[ "$got" == "compare-table ctsurg-grid ctsurg-import ctsurg-normalmap ctsurg-render ctsurg-sim ctsurg-surface ctsurg-tetmesh " ]] || fail "kidney: [$got]"
+  echo "ok: kidney plan: $got"
+  got=$(mk -n head PATIENTS_DIR="$ROOT/data_samples/patients" OUT="$WORK/bundled" | grep -o 'ctsurg-[a-z]*' | sort -u | tr '\n' ' ')
+  [[ "$got" == "ctsurg-grid ctsurg-import ctsurg-sim ctsurg-surface " ]] || fail "head: [$got]"
+  echo "ok: head plan: $got"
+else
+  echo "skipped: kidney and head plans (../shared/data absent)"
+fi
+echo "PASS"
