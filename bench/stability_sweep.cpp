@@ -9,6 +9,9 @@
 // FEM: FemExplicitDynamics refuses a dt above its critical step (InputError), so its bisection runs in
 // (0, 1] x dt_crit and a ratio of 1.00 means "stable at the predicted step itself".
 #include "ctsurg/core/error.h"
+
+#include <cstdio>
+#include <cstdlib>
 #include "ctsurg/core/tet_mesh_file.h"
 #include "ctsurg/core/volume.h"
 #include "ctsurg/sim/explicit_spring_model.h"
@@ -70,15 +73,19 @@ bool fem_stable(const FemModel& model, double dt, const std::vector<int32_t>& fi
     d.set_fixed_nodes(fixed);
     std::vector<double> f(model.nodes.size());
     g_seed = 7;
-    for (auto& x : f) x = 1e-2 * next_random();  // a small random load, then free vibration
+    // A random load of +-100 uN per node for 10 steps (displacements ~1e-3 mm, far above float rounding
+    // of the positions), then free vibration.
+    for (auto& x : f) x = 1e2 * next_random();
     d.set_external_forces(f);
     d.step(10);
     d.set_external_forces({});
     const double e0 = d.kinetic_energy() + d.strain_energy();
     d.step(g_steps);
     const double e = d.kinetic_energy() + d.strain_energy();
+    if (std::getenv("SWEEP_DEBUG")) std::fprintf(stderr, "fem dt %g: e0 %g e %g\n", dt, e0, e);
     return std::isfinite(e) && e < 2 * e0;
-  } catch (const RuntimeError&) {
+  } catch (const RuntimeError& err) {
+    if (std::getenv("SWEEP_DEBUG")) std::fprintf(stderr, "fem dt %g: %s\n", dt, err.what());
     return false;
   }
 }
