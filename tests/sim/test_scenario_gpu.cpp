@@ -10,6 +10,7 @@
 #include "ctsurg/sim/backend.h"
 #include "ctsurg/sim/scenario.h"
 #include "ctsurg/sim/scenario_run.h"
+#include "scenario_test_files.h"
 #include "sim_test_models.h"
 #include "test_support.h"
 
@@ -23,19 +24,7 @@ using namespace ctsurg::sim;
 
 namespace {
 
-void write_block(const fs::path& dir) {
-  OccupancyGrid g;
-  g.occupancy = ctsurg::sim::test::block_occupancy(16, 6, 6, 2.0);
-  g.fraction = Volume<float>(g.occupancy.geometry, 0.f);
-  g.label = Volume<uint16_t>(g.occupancy.geometry, 0);
-  for (size_t i = 0; i < g.occupancy.voxels.size(); ++i) {
-    g.fraction.voxels[i] = g.occupancy.voxels[i] ? 1.f : 0.f;
-    g.label.voxels[i] = g.occupancy.voxels[i];
-  }
-  g.mask = g.label;
-  write_occupancy_grid_file(dir / "grid.h5", g, ctsurg::test::test_provenance());
-  write_surface_mesh_file(dir / "surface.h5", marching_cubes(pad_lattice(g.fraction, 0.f, 1), 0.5), ctsurg::test::test_provenance());
-}
+void write_block(const fs::path& dir) { ctsurg::sim::test::write_block_files(dir, 16, 6, 6, 2.0); }
 
 const char* kScenario = R"(ctsurg_scenario: 1
 model: {kind: spring_grid, grid: grid.h5, surface: surface.h5}

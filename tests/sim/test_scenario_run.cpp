@@ -14,6 +14,7 @@
 #include "ctsurg/core/tet_mesh_file.h"
 #include "ctsurg/sim/fem_box_mesh.h"
 #include "ctsurg/sim/scenario.h"
+#include "scenario_test_files.h"
 #include "sim_test_models.h"
 #include "test_support.h"
 
@@ -28,24 +29,8 @@ using ctsurg::test::TempDir;
 
 namespace {
 
-// A 16 x 4 x 4 bar of 2 mm cells (x from 12 to 42 mm at the cell centres), written as a grid file and
-// its marching-cubes surface (padded, as ctsurg-surface does), in `dir`.
-void write_bar(const fs::path& dir, double z_offset = 0) {
-  OccupancyGrid g;
-  g.occupancy = ctsurg::sim::test::block_occupancy(16, 4, 4, 2.0);
-  g.occupancy.geometry.origin.z() += z_offset;
-  g.fraction = Volume<float>(g.occupancy.geometry, 0.f);
-  g.label = Volume<uint16_t>(g.occupancy.geometry, 0);
-  for (size_t i = 0; i < g.occupancy.voxels.size(); ++i) {
-    g.fraction.voxels[i] = g.occupancy.voxels[i] ? 1.f : 0.f;
-    g.label.voxels[i] = g.occupancy.voxels[i] ? 1 : 0;
-  }
-  g.mask = g.label;
-  g.label_names = {{1, "bar"}};
-  write_occupancy_grid_file(dir / "grid.h5", g, ctsurg::test::test_provenance());
-  SurfaceMesh s = marching_cubes(pad_lattice(g.fraction, 0.f, 1), 0.5);
-  write_surface_mesh_file(dir / "surface.h5", s, ctsurg::test::test_provenance());
-}
+// A 16 x 4 x 4 bar of 2 mm cells (x from 12 to 42 mm at the cell centres) and its surface, in `dir`.
+void write_bar(const fs::path& dir, double z_offset = 0) { ctsurg::sim::test::write_block_files(dir, 16, 4, 4, 2.0, z_offset); }
 
 // The scenario text with `tools` and `time` sections inserted.
 std::string bar_scenario(const std::string& tools, const std::string& time, const std::string& extra = "") {
@@ -231,17 +216,7 @@ TEST(ScenarioRun, FarFromTheOriginTheResultIsTheSame) {
 
 namespace {
 
-// The bar's solid (x 11..43, y -19..-11, z 31..39 mm) as a structured tet mesh, written as tetmesh.h5.
-void write_bar_tets(const fs::path& dir) {
-  const FemBoxMesh box = fem_box_mesh({8, 2, 2}, {32, 8, 8}, {11, -19, 31});
-  TetMesh m;
-  m.nodes = box.nodes;
-  m.tets = box.tets;
-  m.tet_labels.assign(box.tets.size() / 4, 1);
-  m.quality.radius_edge_bin_edges = {0, 1};
-  m.quality.radius_edge_histogram = {static_cast<int64_t>(m.tet_labels.size())};
-  write_tet_mesh_file(dir / "tetmesh.h5", m, ctsurg::test::test_provenance());
-}
+void write_bar_tets(const fs::path& dir) { ctsurg::sim::test::write_bar_tet_mesh(dir); }
 
 std::string fem_scenario(const std::string& law, const std::string& solver, const std::string& time) {
   return "ctsurg_scenario: 1\nmodel:\n  kind: fem\n  tetmesh: tetmesh.h5\n  surface: surface.h5\n  material_law: " + law +
@@ -272,7 +247,9 @@ TEST(ScenarioRun, FemStaticAndDynamicAgreeAndTheGrabIsPrescribed) {
   EXPECT_LT(a.metric("max_displacement")->values.back(), 3.2);
   const float* last = a.frame_vertices(a.frame_count() - 1);
   for (int64_t v = 0; v < a.vertex_count(); ++v) {
-    if (a.rest_vertices[static_cast<size_t>(3 * v)] < 11.5) EXPECT_NEAR(last[3 * v + 2], a.rest_vertices[static_cast<size_t>(3 * v + 2)], 1e-4);
+    if (a.rest_vertices[static_cast<size_t>(3 * v)] < 11.5) {
+      EXPECT_NEAR(last[3 * v + 2], a.rest_vertices[static_cast<size_t>(3 * v + 2)], 1e-4);
+    }
   }
   EXPECT_GT(a.metric("surface_max_displacement")->values.back(), 2.5);
   // A damped dynamic run holding the same grab settles to the static shape.

@@ -24,6 +24,7 @@
 #include "ctsurg/sim/spring_calibration.h"
 #include "ctsurg/sim/spring_mass_step.h"
 #include "ctsurg/sim/stability.h"
+#include "scenario_test_files.h"
 #include "sim_test_models.h"
 #include "test_support.h"
 
@@ -47,27 +48,8 @@ namespace {
 // The bar of tests/sim/test_scenario_run.cpp: 16 x 4 x 4 cells of 2 mm (solid x 11..43, y -19..-11,
 // z 31..39 mm), as grid, surface and (8 x 2 x 2 cells of 4 mm, Kuhn tets) tet mesh files in `dir`.
 void write_bar(const fs::path& dir) {
-  OccupancyGrid g;
-  g.occupancy = ctsurg::sim::test::block_occupancy(16, 4, 4, 2.0);
-  g.fraction = Volume<float>(g.occupancy.geometry, 0.f);
-  g.label = Volume<uint16_t>(g.occupancy.geometry, 0);
-  for (size_t i = 0; i < g.occupancy.voxels.size(); ++i) {
-    g.fraction.voxels[i] = g.occupancy.voxels[i] ? 1.f : 0.f;
-    g.label.voxels[i] = g.occupancy.voxels[i] ? 1 : 0;
-  }
-  g.mask = g.label;
-  g.label_names = {{1, "bar"}};
-  write_occupancy_grid_file(dir / "grid.h5", g, ctsurg::test::test_provenance());
-  write_surface_mesh_file(dir / "surface.h5", marching_cubes(pad_lattice(g.fraction, 0.f, 1), 0.5),
-                          ctsurg::test::test_provenance());
-  const FemBoxMesh box = fem_box_mesh({8, 2, 2}, {32, 8, 8}, {11, -19, 31});
-  TetMesh m;
-  m.nodes = box.nodes;
-  m.tets = box.tets;
-  m.tet_labels.assign(box.tets.size() / 4, 1);
-  m.quality.radius_edge_bin_edges = {0, 1};
-  m.quality.radius_edge_histogram = {static_cast<int64_t>(m.tet_labels.size())};
-  write_tet_mesh_file(dir / "tetmesh.h5", m, ctsurg::test::test_provenance());
+  ctsurg::sim::test::write_block_files(dir, 16, 4, 4, 2.0);
+  ctsurg::sim::test::write_bar_tet_mesh(dir);
 }
 
 // A scenario on the bar: `model` is the model section's body, `tools` and `time` whole sections.
