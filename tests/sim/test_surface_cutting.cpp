@@ -64,7 +64,9 @@ TEST(SurfaceCutting, BladeAcrossTheBarOpensTheSurface) {
     const bool left = b.mesh.vertices[static_cast<size_t>(3 * v)] < x0;
     for (int s = 0; s < 8; ++s) {
       const int32_t p = b.coupling.particles[static_cast<size_t>(8 * v + s)];
-      if (p >= 0) EXPECT_EQ(b.model.rest_positions[static_cast<size_t>(3 * p)] < x0, left) << "vertex " << v;
+      if (p >= 0) {
+        EXPECT_EQ(b.model.rest_positions[static_cast<size_t>(3 * p)] < x0, left) << "vertex " << v;
+      }
     }
   }
   // Move the right half's particles 4 mm further right: the right half of the surface goes with them
