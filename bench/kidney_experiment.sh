@@ -13,7 +13,6 @@ ROOT=$PWD
 BIN=$ROOT/build/bin
 DATA=$(cd "$ROOT/.." && pwd)/shared/data/abdomen
 [[ -e $DATA/upper_abdomen_ct.nii.gz ]] || { echo "kidney_experiment.sh: $DATA is missing" >&2; exit 2; }
-FORCES=("${@:-0.1 0.2 0.4}")
 [[ $# -gt 0 ]] && FORCES=("$@") || FORCES=(0.1 0.2 0.4)
 WORK=$(mktemp -d)
 trap 'rm -rf "$WORK"' EXIT

@@ -363,7 +363,7 @@ int main(int argc, char** argv) {
     Spec s;
     s.name = "kidney";
     s.levels = organ_levels("kidney", quick ? std::vector<std::string>{"6", "4.5", "3"} : std::vector<std::string>{"6", "4.5", "3", "2.25", "1.8"});
-    s.material = "  youngs_modulus_pa: 10000\n  poisson_ratio: 0.45\n  density_g_per_cm3: 1.05\n";
+    s.material = "  preset: kidney\n";
     s.fixed = "fixed:\n  - box_fraction: {min: [0, 0.8, 0], max: [1, 1, 1]}\n";
     s.tools = "tools:\n  - force:\n      radius_mm: 6\n      snap_to_tissue: true\n      force_n: [0, 0.2, 0]\n      path:\n"
               "        - {t: 0, at_fraction: [0.5, 0.0, 0.5]}\n";
@@ -375,7 +375,7 @@ int main(int argc, char** argv) {
     Spec s;
     s.name = "heart";
     s.levels = organ_levels("heart", {"7.2", "4.8", "3.6"});
-    s.material = "  youngs_modulus_pa: 30000\n  poisson_ratio: 0.45\n  density_g_per_cm3: 1.06\n";
+    s.material = "  preset: myocardium\n";
     s.fixed = "fixed:\n  - box_fraction: {min: [0, 0, 0.85], max: [1, 1, 1]}\n";
     s.tools = "tools:\n  - grab:\n      radius_mm: 8\n      snap_to_tissue: true\n      path:\n"
               "        - {t: 0, at_fraction: [0.75, 0.0, 0.2]}\n        - {t: 0.05, offset_mm: [5, -12.5, -5]}\n";

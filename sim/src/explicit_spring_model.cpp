@@ -171,11 +171,16 @@ ExplicitSpringModel explicit_model_from_grid(const SpringGridModel& grid) {
 }
 
 ExplicitSpringModel explicit_model_from_tet_mesh(const TetMesh& mesh, double density, double stiffness, double damping) {
+  return explicit_model_from_tet_mesh(mesh, density, [stiffness](double, double) { return stiffness; }, damping);
+}
+
+ExplicitSpringModel explicit_model_from_tet_mesh(const TetMesh& mesh, double density,
+                                                 const std::function<double(double, double)>& stiffness, double damping) {
   if (mesh.node_count() == 0 || mesh.tet_count() == 0) throw InputError("tetmesh", "/tetmesh/tets", "empty mesh");
   if (!(std::isfinite(density) && density > 0)) throw InputError("tetmesh", "density", "must be finite and > 0");
   const int64_t n = mesh.node_count();
   std::vector<double> lumped(static_cast<std::size_t>(n), 0.0);
-  std::map<std::pair<int32_t, int32_t>, int> edges;  // ordered: deterministic spring order
+  std::map<std::pair<int32_t, int32_t>, double> edges;  // -> volume of its tets; ordered: deterministic spring order
   for (int64_t t = 0; t < mesh.tet_count(); ++t) {
     const int32_t* v = &mesh.tets[static_cast<std::size_t>(4 * t)];
     for (int a = 0; a < 4; ++a)
@@ -185,7 +190,7 @@ ExplicitSpringModel explicit_model_from_tet_mesh(const TetMesh& mesh, double den
     const double volume = std::abs((p[1] - p[0]).dot((p[2] - p[0]).cross(p[3] - p[0]))) / 6.0;
     for (int a = 0; a < 4; ++a) {
       lumped[v[a]] += density * volume / 4.0;
-      for (int b = a + 1; b < 4; ++b) edges.emplace(std::minmax(v[a], v[b]), 0);
+      for (int b = a + 1; b < 4; ++b) edges[std::minmax(v[a], v[b])] += volume;
     }
   }
   std::vector<Real> rest(static_cast<std::size_t>(3 * n)), mass(static_cast<std::size_t>(n));
@@ -196,9 +201,10 @@ ExplicitSpringModel explicit_model_from_tet_mesh(const TetMesh& mesh, double den
   }
   std::vector<Spring> springs;
   springs.reserve(edges.size());
-  for (const auto& [e, unused] : edges) {
+  for (const auto& [e, volume] : edges) {
     const Eigen::Vector3d a(&mesh.nodes[static_cast<std::size_t>(3 * e.first)]), b(&mesh.nodes[static_cast<std::size_t>(3 * e.second)]);
-    springs.push_back({e.first, e.second, stiffness, (a - b).norm(), damping});
+    const double length = (a - b).norm();
+    springs.push_back({e.first, e.second, stiffness(volume, length), length, damping});
   }
   return build_explicit_spring_model(rest, mass, springs);
 }

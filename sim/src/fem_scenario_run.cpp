@@ -65,7 +65,7 @@ Trajectory run_fem_scenario(const Scenario& s, RunReport* report_out, const std:
   const std::vector<double>& rest = model.nodes;
   const int64_t nn = model.node_count();
   report.particles = nn;
-  report.springs = model.tet_count();
+  report.elements = model.tet_count();
   const Bounds bounds = bounds_of(rest);
 
   // Fixed regions (nodes).
@@ -235,15 +235,20 @@ Trajectory run_fem_scenario(const Scenario& s, RunReport* report_out, const std:
   // A grab captures the free nodes inside its sphere once, at time `t` (its start), with their
   // displacement then; afterwards they are held at that displacement plus the tool's travel.
   std::vector<std::vector<double>> capture_u(grabs.size());
+  // The free nodes inside a sphere (centre c, radius r) at displacement cur_u, increasing.
+  const auto free_nodes_in_sphere = [&](const Vec3& c, double r, const std::vector<double>& cur_u) {
+    std::vector<int32_t> ids;
+    for (int64_t i = 0; i < nn; ++i) {
+      double d = 0;
+      for (size_t a = 0; a < 3; ++a) d += std::pow(rest[static_cast<size_t>(3 * i) + a] + cur_u[static_cast<size_t>(3 * i) + a] - c[a], 2);
+      if (d < r * r && !fixed.count(static_cast<int32_t>(i))) ids.push_back(static_cast<int32_t>(i));
+    }
+    return ids;
+  };
   const auto capture = [&](size_t gi, double t, const std::vector<double>& cur_u) {
     FemGrab& g = grabs[gi];
     const Vec3 c = g.path.at(t);
-    for (int64_t i = 0; i < nn; ++i) {
-      const double d = std::pow(rest[static_cast<size_t>(3 * i)] + cur_u[static_cast<size_t>(3 * i)] - c[0], 2) +
-                       std::pow(rest[static_cast<size_t>(3 * i + 1)] + cur_u[static_cast<size_t>(3 * i + 1)] - c[1], 2) +
-                       std::pow(rest[static_cast<size_t>(3 * i + 2)] + cur_u[static_cast<size_t>(3 * i + 2)] - c[2], 2);
-      if (d < g.spec->radius_mm * g.spec->radius_mm && !fixed.count(static_cast<int32_t>(i))) g.nodes.push_back(static_cast<int32_t>(i));
-    }
+    g.nodes = free_nodes_in_sphere(c, g.spec->radius_mm, cur_u);
     if (g.nodes.empty()) {
       throw InputError(sfile, g.spec->label, "grabs no free node at t = " + std::to_string(t) +
                                                  " s; move it onto the tissue or set snap_to_tissue: true");
@@ -278,35 +283,38 @@ Trajectory run_fem_scenario(const Scenario& s, RunReport* report_out, const std:
     }
   };
 
-  // The external nodal forces (uN, #N x 3) of the force tools active at t; captures at t (dynamic) or
-  // at the tool's start (static), from the displacement cur_u. Empty when no force acts.
-  const auto force_state = [&](double t, const std::vector<double>& cur_u, bool capture_at_start) {
-    std::vector<double> f;
+  // The external nodal forces (uN, #N x 3; empty when no force acts) of the force tools active at t.
+  // A force captures its nodes at t (dynamic) or at its start (static), from the displacement cur_u.
+  // Rebuilt only when a force starts or ends; returns whether it changed.
+  std::vector<double> nodal_forces;
+  const auto update_forces = [&](double t, const std::vector<double>& cur_u, bool capture_at_start) {
+    bool changed = false;
     for (auto& g : forces) {
       if (g.nodes.empty() && !g.released && g.active(t)) {
-        const Vec3 c = g.path.at(capture_at_start ? g.spec->start_s : t);
-        for (int64_t i = 0; i < nn; ++i) {
-          double d = 0;
-          for (size_t a = 0; a < 3; ++a) d += std::pow(rest[static_cast<size_t>(3 * i) + a] + cur_u[static_cast<size_t>(3 * i) + a] - c[a], 2);
-          if (d < g.spec->radius_mm * g.spec->radius_mm && !fixed.count(static_cast<int32_t>(i))) g.nodes.push_back(static_cast<int32_t>(i));
-        }
+        g.nodes = free_nodes_in_sphere(g.path.at(capture_at_start ? g.spec->start_s : t), g.spec->radius_mm, cur_u);
         if (g.nodes.empty()) {
           throw InputError(sfile, g.spec->label, "the force's sphere holds no free node; move it onto the tissue or set snap_to_tissue: true");
         }
         report.notes.push_back(g.spec->label + ": force shared by " + std::to_string(g.nodes.size()) + " nodes");
+        changed = true;
       }
       if (!g.nodes.empty() && !g.active(t)) {
         g.nodes.clear();
         g.released = true;
-      }
-      if (g.nodes.empty()) continue;
-      if (f.empty()) f.assign(static_cast<size_t>(3 * nn), 0.0);
-      const double share = 1e6 / static_cast<double>(g.nodes.size());  // N -> uN
-      for (const int32_t n : g.nodes) {
-        for (size_t a = 0; a < 3; ++a) f[static_cast<size_t>(3 * n) + a] += g.spec->force_n[a] * share;
+        changed = true;
       }
     }
-    return f;
+    if (!changed) return false;
+    nodal_forces.clear();
+    for (const auto& g : forces) {
+      if (g.nodes.empty()) continue;
+      if (nodal_forces.empty()) nodal_forces.assign(static_cast<size_t>(3 * nn), 0.0);
+      const double share = 1e6 / static_cast<double>(g.nodes.size());  // N -> uN
+      for (const int32_t n : g.nodes) {
+        for (size_t a = 0; a < 3; ++a) nodal_forces[static_cast<size_t>(3 * n) + a] += g.spec->force_n[a] * share;
+      }
+    }
+    return true;
   };
 
   const auto start = std::chrono::steady_clock::now();
@@ -339,7 +347,7 @@ Trajectory run_fem_scenario(const Scenario& s, RunReport* report_out, const std:
         }
       }
       dyn->set_contact_sphere(centre, radius);
-      dyn->set_external_forces(force_state(t_next, u, false));
+      if (update_forces(t_next, u, false)) dyn->set_external_forces(nodal_forces);
       try {
         dyn->step(1);
       } catch (const RuntimeError& e) {
@@ -369,7 +377,8 @@ Trajectory run_fem_scenario(const Scenario& s, RunReport* report_out, const std:
       grab_state(t, gnodes, gdisp, u, true);
       bc.prescribed_nodes = gnodes;
       bc.prescribed_displacements = gdisp;
-      loads.forces = force_state(t, u, true);
+      update_forces(t, u, true);
+      loads.forces = nodal_forces;
       const FemStaticResult r = solve_fem_static(model, bc, loads, options, backend);
       if (!r.report.converged) {
         throw RuntimeError(sfile + ": the static FEM solve of frame " + std::to_string(f) + " (t = " + std::to_string(t) +

@@ -318,7 +318,10 @@ Trajectory run_scenario(const Scenario& s, RunReport* report_out, const std::fun
   double t = 0;
   record_frame(0.0);
   int64_t next_frame = 1;
-  Checkpoint checkpoint{state, model, tools, triangles, coupling, 0.0, 0, 0, 0, 1};
+  // The last frame's state, for restarts with half the step; kept only when the run may restart.
+  const bool restartable = s.max_step_halvings > 0 && !engine->on_device();
+  Checkpoint checkpoint;
+  if (restartable) checkpoint = Checkpoint{state, model, tools, triangles, coupling, 0.0, 0, 0, 0, 1};
   int halvings = 0;
   const auto start = std::chrono::steady_clock::now();
   double last_progress = -1;
@@ -419,7 +422,7 @@ Trajectory run_scenario(const Scenario& s, RunReport* report_out, const std::fun
       const StabilityReport check = guard.check(state, t, tool_work);
       tool_work = false;
       if (!check.stable) {
-        if (halvings >= s.max_step_halvings || engine->on_device()) {
+        if (!restartable || halvings >= s.max_step_halvings) {
           throw RuntimeError(sfile + ": the run became unstable: " + check.message +
                              (s.max_step_halvings > 0 ? " (after " + std::to_string(halvings) + " step halvings)"
                                                       : " Set time.dt_s lower, or allow time.max_step_halvings."));
@@ -457,7 +460,9 @@ Trajectory run_scenario(const Scenario& s, RunReport* report_out, const std::fun
     if (frame_due) {
       record_frame(t);
       ++next_frame;
-      checkpoint = Checkpoint{state, model, tools, triangles, coupling, t, steps, springs_cut, triangles_removed, traj.time.size()};
+      if (restartable) {
+        checkpoint = Checkpoint{state, model, tools, triangles, coupling, t, steps, springs_cut, triangles_removed, traj.time.size()};
+      }
       const double fraction = t / s.duration_s;
       if (progress && fraction - last_progress >= 0.01) {
         progress(fraction);

@@ -68,10 +68,19 @@ int main(int argc, char** argv) {
         });
         bar.reset();
         for (const auto& note : report.notes) spdlog::info("sim: {}", note);
-        spdlog::info("sim: {} particles ({} fixed), {} springs; dt {:.3g} s (critical {:.3g} s), {} steps in {:.2f} s "
-                     "({:.0f} steps/s)",
-                     report.particles, report.fixed, report.springs, report.dt_s, report.critical_dt_s, report.steps,
-                     report.wall_s, report.wall_s > 0 ? report.steps / report.wall_s : 0.0);
+        const double rate = report.wall_s > 0 ? report.steps / report.wall_s : 0.0;
+        if (s.model != ctsurg::sim::ModelKind::fem) {
+          spdlog::info("sim: {} particles ({} fixed), {} springs; dt {:.3g} s (critical {:.3g} s), {} steps in {:.2f} s ({:.0f} steps/s)",
+                       report.particles, report.fixed, report.springs, report.dt_s, report.critical_dt_s, report.steps, report.wall_s,
+                       rate);
+        } else if (s.fem_solver == ctsurg::sim::FemSolver::dynamic) {
+          spdlog::info("sim: {} nodes ({} fixed), {} tets; dt {:.3g} s (critical {:.3g} s), {} steps in {:.2f} s ({:.0f} steps/s)",
+                       report.particles, report.fixed, report.elements, report.dt_s, report.critical_dt_s, report.steps,
+                       report.wall_s, rate);
+        } else {
+          spdlog::info("sim: {} nodes ({} fixed), {} tets; static equilibrium per frame, {} Newton iterations in {:.2f} s",
+                       report.particles, report.fixed, report.elements, report.steps, report.wall_s);
+        }
         if (report.springs_cut > 0) {
           spdlog::info("sim: {} springs cut, {} surface triangles removed", report.springs_cut, report.surface_triangles_removed);
         }

@@ -16,6 +16,7 @@
 #include "ctsurg/sim/spring_grid_model.h"
 
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 namespace ctsurg {
@@ -99,6 +100,11 @@ ExplicitSpringModel explicit_model_from_grid(const SpringGridModel& grid);
 // all; masses lumped: each tet gives density * volume / 4 to each of its nodes (g/mm^3 * mm^3).
 // Throws InputError("tetmesh", ...) for an empty mesh or a node that no tet uses.
 ExplicitSpringModel explicit_model_from_tet_mesh(const TetMesh& mesh, double density, double stiffness,
+                                                 double damping = 0);
+// The same with a stiffness per edge: stiffness(volume, length) in g/s^2 for an edge of rest length
+// `length` (mm) whose tets have total volume `volume` (mm^3); spring_calibration.h uses E V / l^2.
+ExplicitSpringModel explicit_model_from_tet_mesh(const TetMesh& mesh, double density,
+                                                 const std::function<double(double volume, double length)>& stiffness,
                                                  double damping = 0);
 
 // Cuts spring s (clears its alive flag and its entries in the CPU layout). Returns false when it was

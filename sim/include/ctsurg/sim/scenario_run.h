@@ -28,11 +28,13 @@
 namespace ctsurg::sim {
 
 struct RunReport {
-  int64_t particles = 0, springs = 0, fixed = 0;
+  int64_t particles = 0, fixed = 0;  // particles (spring models) or nodes (FEM); those held fixed
+  int64_t springs = 0;               // spring models: springs present at the start
+  int64_t elements = 0;              // FEM: tets
   double critical_dt_s = 0;  // the per-particle critical step (stability.h)
   double dt_s = 0;           // the step used at the end of the run
   int halvings = 0;          // step halvings after instability
-  int64_t steps = 0;
+  int64_t steps = 0;                 // time steps (FEM static: Newton iterations)
   int64_t springs_cut = 0;
   int64_t surface_triangles_removed = 0;
   double wall_s = 0;         // seconds in the time loop

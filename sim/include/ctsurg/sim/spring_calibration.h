@@ -37,8 +37,9 @@ double grid_spring_stiffness(double youngs_modulus_pa, const ImageGeometry& latt
 SpringGridMaterial calibrated_grid_material(const Material& material, const ImageGeometry& lattice,
                                             bool mass_from_fraction = false);
 // The tet mesh's edges as springs with k_ij = E sum V_t / l_ij^2 and masses lumped from the tets
-// (density * V_t / 4 per node). Throws InputError("tetmesh", ...) for an empty mesh, a tet of zero or
-// negative volume, or a node in no tet.
+// (density * V_t / 4 per node), built by explicit_model_from_tet_mesh. Throws InputError("material", ...)
+// for a material out of range and InputError("tetmesh", ...) for an empty mesh or a node in no tet of
+// positive volume.
 ExplicitSpringModel calibrated_tet_spring_model(const TetMesh& mesh, const Material& material);
 
 }  // namespace ctsurg::sim
