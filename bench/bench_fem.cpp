@@ -6,7 +6,8 @@
 //    the centre of the top face grabbed 2 mm down (Newton, load factor 1, line search), and the
 //    linear material under the same grab (one Newton step); diagonal and incomplete-Cholesky
 //    preconditioned CG. Counters: Newton iterations, mean CG iterations per Newton step, ms per Newton
-//    iteration, assembly and CG ms.
+//    iteration, assembly and CG ms. And the linear material's factorised solver
+//    (fem_linear_static_solver.h) for repeated solves: time per solve once the factor exists.
 // 3. The cantilever of tests/sim/test_fem_static_solver.cpp at finer meshes than the test can afford
 //    (n = 8, 12, 14 cells across the thickness, L = 10 h): counter error_pct = tip deflection error
 //    against Euler-Bernoulli (linear tets lock in bending: the error falls as n^-2).
@@ -14,10 +15,12 @@
 //    node gather, central-difference update) at 10k .. 500k tets, 1 and 2 threads.
 #include "ctsurg/sim/fem_box_mesh.h"
 #include "ctsurg/sim/fem_explicit_dynamics.h"
+#include "ctsurg/sim/fem_linear_static_solver.h"
 #include "ctsurg/sim/fem_static_solver.h"
 
 #include <benchmark/benchmark.h>
 
+#include <algorithm>
 #include <cmath>
 #include <map>
 #include <memory>
@@ -44,19 +47,26 @@ const FemModel& cube(int n, FemMaterialModel model) {
   return *slot;
 }
 
-void static_solve(benchmark::State& state, FemMaterialModel model) {
-  const int n = static_cast<int>(state.range(0));
-  const auto pre = state.range(1) ? FemPreconditioner::incomplete_cholesky : FemPreconditioner::diagonal;
-  const FemModel& m = cube(n, model);
+// The benchmark's boundary conditions: bottom face fixed, the top face's centre (radius 3.5 mm)
+// grabbed `depth` mm down.
+FemBoundaryConditions cube_grab(const FemModel& m, double depth) {
   FemBoundaryConditions bc;
   for (int32_t i = 0; i < m.node_count(); ++i) {
     const double* p = &m.nodes[3 * i];
     if (p[2] == 0) bc.fixed_nodes.push_back(i);
     if (std::abs(p[2] - 20) < 1e-9 && std::hypot(p[0] - 10, p[1] - 10) <= 3.5) {
       bc.prescribed_nodes.push_back(i);
-      bc.prescribed_displacements.insert(bc.prescribed_displacements.end(), {0.0, 0.0, -2.0});
+      bc.prescribed_displacements.insert(bc.prescribed_displacements.end(), {0.0, 0.0, -depth});
     }
   }
+  return bc;
+}
+
+void static_solve(benchmark::State& state, FemMaterialModel model) {
+  const int n = static_cast<int>(state.range(0));
+  const auto pre = state.range(1) ? FemPreconditioner::incomplete_cholesky : FemPreconditioner::diagonal;
+  const FemModel& m = cube(n, model);
+  const FemBoundaryConditions bc = cube_grab(m, 2.0);
   FemStaticOptions o;
   o.preconditioner = pre;
   FemStaticReport rep;
@@ -74,6 +84,45 @@ void static_solve(benchmark::State& state, FemMaterialModel model) {
   state.counters["assembly_ms"] = 1e3 * rep.assembly_seconds;
   state.counters["cg_ms"] = 1e3 * rep.solve_seconds;
 }
+
+// The linear material's repeated solve (fem_linear_static_solver.h): the stiffness factorised once,
+// then one condensed solve per frame as the grab moves (depths 2.0, 1.9, 1.8, ... mm: a different
+// right-hand side every time). Counters: factor_ms (assembly + AMD + LDL^T, once), columns_ms (the
+// grabbed nodes' unit responses, once per grab), the relative residual each solve reaches, and
+// max_diff_mm against the Newton-CG solve of the same grab (CG tolerance 1e-12).
+void BM_FemStaticLinearFactorised(benchmark::State& state) {
+  const int n = static_cast<int>(state.range(0));
+  const FemModel& m = cube(n, FemMaterialModel::linear);
+  const FemBoundaryConditions bc = cube_grab(m, 2.0);
+  FemBoundaryConditions supports;
+  supports.fixed_nodes = bc.fixed_nodes;
+  FemLinearStaticSolver solver(m, supports);
+  std::vector<double> d = bc.prescribed_displacements;
+  const FemStaticResult first = solver.solve(bc.prescribed_nodes, d, {});
+  const double columns_ms = 1e3 * first.report.seconds;
+  FemStaticOptions o;
+  o.cg_tolerance = 1e-12;
+  const FemStaticResult cg = solve_fem_static(m, bc, {}, o);
+  double max_diff = 0;
+  for (std::size_t i = 0; i < cg.displacements.size(); ++i) max_diff = std::max(max_diff, std::abs(cg.displacements[i] - first.displacements[i]));
+  int k = 0;
+  double worst_residual = first.report.relative_residual;
+  for (auto _ : state) {
+    const double depth = 2.0 - 0.1 * (k++ % 10);
+    for (std::size_t g = 0; g < bc.prescribed_nodes.size(); ++g) d[3 * g + 2] = -depth;
+    const FemStaticResult r = solver.solve(bc.prescribed_nodes, d, {});
+    worst_residual = std::max(worst_residual, r.report.relative_residual);
+    benchmark::DoNotOptimize(r.displacements.data());
+  }
+  state.counters["vertices"] = m.node_count();
+  state.counters["tets"] = m.tet_count();
+  state.counters["factor_ms"] = 1e3 * solver.stats().factor_seconds;
+  state.counters["factor_nnz"] = static_cast<double>(solver.stats().factor_nonzeros);
+  state.counters["columns_ms"] = columns_ms;
+  state.counters["rel_residual"] = worst_residual;
+  state.counters["max_diff_mm"] = max_diff;
+}
+BENCHMARK(BM_FemStaticLinearFactorised)->Arg(9)->Arg(12)->Arg(14)->Arg(16)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 void BM_FemStaticNeoHookean(benchmark::State& s) { static_solve(s, FemMaterialModel::neo_hookean); }
 void BM_FemStaticLinear(benchmark::State& s) { static_solve(s, FemMaterialModel::linear); }

@@ -2,8 +2,10 @@
 // fixed regions, grab tools as prescribed displacements of the nodes they capture, probes as sphere
 // contact (dynamic only), gravity; the surface embedded in the tets (tet_embedding.h). Two solvers:
 //   dynamic: explicit central differences (fem_explicit_dynamics.h), the tools updated every step;
-//   static:  at every output frame, the equilibrium under that frame's grab displacements and gravity
-//            (fem_static_solver.h: Newton with conjugate gradients), a quasi-static sequence.
+//   static:  at every output frame, the equilibrium under that frame's grab displacements, forces and
+//            gravity, a quasi-static sequence: the linear material by the factorised, condensed solver
+//            (fem_linear_static_solver.h: one factorisation for the run), the nonlinear laws by Newton
+//            with conjugate gradients (fem_static_solver.h).
 // Same trajectory layout and metrics as the spring models (scenario_run.h), plus the static solver's
 // newton_iterations and cg_iterations per frame.
 #include "ctsurg/core/error.h"
@@ -13,6 +15,7 @@
 #include "ctsurg/core/tet_mesh_file.h"
 #include "ctsurg/sim/fem_explicit_dynamics.h"
 #include "ctsurg/sim/fem_forces.h"
+#include "ctsurg/sim/fem_linear_static_solver.h"
 #include "ctsurg/sim/fem_model.h"
 #include "ctsurg/sim/fem_static_solver.h"
 #include "ctsurg/sim/fixed_regions.h"
@@ -281,6 +284,18 @@ Trajectory run_fem_scenario(const Scenario& s, RunReport* report_out, const std:
         for (size_t a = 0; a < 3; ++a) disp.push_back(capture_u[gi][3 * k + a] + c[a] - g.captured_at[a]);
       }
     }
+    // A node that two grabs hold follows the later one (listed once: the solvers take a node set).
+    std::vector<int64_t> last(static_cast<size_t>(nn), -1);
+    for (size_t k = 0; k < nodes.size(); ++k) last[static_cast<size_t>(nodes[k])] = static_cast<int64_t>(k);
+    size_t kept = 0;
+    for (size_t k = 0; k < nodes.size(); ++k) {
+      if (last[static_cast<size_t>(nodes[k])] != static_cast<int64_t>(k)) continue;
+      nodes[kept] = nodes[k];
+      for (size_t a = 0; a < 3; ++a) disp[3 * kept + a] = disp[3 * k + a];
+      ++kept;
+    }
+    nodes.resize(kept);
+    disp.resize(3 * kept);
   };
 
   // The external nodal forces (uN, #N x 3; empty when no force acts) of the force tools active at t.
@@ -364,7 +379,9 @@ Trajectory run_fem_scenario(const Scenario& s, RunReport* report_out, const std:
       }
     }
   } else {
-    // Quasi-static: each frame's equilibrium under that frame's grabs and gravity.
+    // Quasi-static: each frame's equilibrium under that frame's grabs and gravity. The linear material
+    // factorises its constant stiffness once (fem_linear_static_solver.h); the nonlinear laws run
+    // Newton with conjugate gradients per frame.
     FemBoundaryConditions bc;
     bc.fixed_nodes = fixed_nodes;
     FemLoads loads;
@@ -372,14 +389,27 @@ Trajectory run_fem_scenario(const Scenario& s, RunReport* report_out, const std:
     FemStaticOptions options;
     options.threads = s.threads;
     options.load_steps = 1;
+    std::optional<FemLinearStaticSolver> linear;
+    if (material.model == FemMaterialModel::linear) {
+      FemLinearSolverOptions lo;
+      lo.threads = s.threads;
+      linear.emplace(model, bc, lo);
+      report.notes.push_back("FEM linear static: stiffness factorised once (" + std::to_string(linear->stats().factor_nonzeros) +
+                             " non-zeros, " + std::to_string(linear->stats().factor_seconds) + " s); each frame a condensed solve");
+    }
     for (int64_t f = 1; f < frame_count; ++f) {
       const double t = static_cast<double>(f) * s.frame_interval_s;
       grab_state(t, gnodes, gdisp, u, true);
-      bc.prescribed_nodes = gnodes;
-      bc.prescribed_displacements = gdisp;
       update_forces(t, u, true);
       loads.forces = nodal_forces;
-      const FemStaticResult r = solve_fem_static(model, bc, loads, options, backend);
+      FemStaticResult r;
+      if (linear) {
+        r = linear->solve(gnodes, gdisp, loads);
+      } else {
+        bc.prescribed_nodes = gnodes;
+        bc.prescribed_displacements = gdisp;
+        r = solve_fem_static(model, bc, loads, options, backend);
+      }
       if (!r.report.converged) {
         throw RuntimeError(sfile + ": the static FEM solve of frame " + std::to_string(f) + " (t = " + std::to_string(t) +
                            " s) did not converge: relative residual " + std::to_string(r.report.relative_residual) +
