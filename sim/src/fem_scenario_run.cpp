@@ -408,6 +408,7 @@ Trajectory run_fem_scenario(const Scenario& s, RunReport* report_out, const std:
       } else {
         bc.prescribed_nodes = gnodes;
         bc.prescribed_displacements = gdisp;
+        if (f > 1) options.initial_displacements = u;  // warm start from the previous frame
         r = solve_fem_static(model, bc, loads, options, backend);
       }
       if (!r.report.converged) {

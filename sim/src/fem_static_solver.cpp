@@ -55,6 +55,10 @@ void validate(const FemModel& model, const FemBoundaryConditions& bc, const FemL
   if (o.max_line_search < 0 || o.max_line_search > 30) throw InputError(kWhere, "max_line_search", "must be in [0, 30]");
   if (o.cg_max_iterations < 0) throw InputError(kWhere, "cg_max_iterations", "must be >= 0");
   if (o.threads < 0) throw InputError(kWhere, "threads", "must be >= 0");
+  if (!o.initial_displacements.empty() && o.initial_displacements.size() != 3 * static_cast<std::size_t>(n))
+    throw InputError(kWhere, "initial_displacements", "expected #N x 3 = " + std::to_string(3 * n) + " values or none");
+  for (double d : o.initial_displacements)
+    if (!std::isfinite(d)) throw InputError(kWhere, "initial_displacements", "must be finite");
 }
 
 struct System {
@@ -186,10 +190,20 @@ class Solver {
     int halvings = 0;
     std::string last_failure;
     if (rep.reference_residual == 0) factor = 1;  // nothing to do: u = 0 is the solution
+    if (factor < 1 && !o_.initial_displacements.empty()) {  // warm start: the full load at once
+      trial = o_.initial_displacements;  // held components are lifted to their targets by newton()
+      if (newton(trial, 1.0, rep, last_failure)) {
+        u.swap(trial);
+        factor = 1;
+        rep.load_factors.push_back(factor);
+        ++rep.load_steps;
+      } else {
+        rep.warm_start_failed = true;
+      }
+    }
     while (factor < 1) {
       const double next = std::min(1.0, factor + increment);
-      trial = u;
-      apply_held(trial, next);
+      trial = u;  // held components at the last factor's values: Newton lifts them (see newton)
       if (newton(trial, next, rep, last_failure)) {
         u.swap(trial);
         factor = next;
@@ -265,8 +279,49 @@ class Solver {
     return static_cast<int>(cg.iterations());
   }
 
+  // gap = s target - u on the held components (0 elsewhere); returns whether any is non-zero.
+  bool held_gap(const std::vector<double>& u, double s, std::vector<double>& gap) const {
+    bool any = false;
+    for (std::size_t d = 0; d < u.size(); ++d) {
+      gap[d] = held_[d] ? s * target_[d] - u[d] : 0.0;
+      any = any || gap[d] != 0;
+    }
+    return any;
+  }
+
+  // b = r - K_fh gap on the free components, K_fh from the element matrices of the last assembly
+  // (serial, in element order: deterministic); only elements with a moving held corner contribute.
+  void lift(const std::vector<double>& gap, Eigen::VectorXd& b) const {
+    const int32_t t = m_.tet_count();
+    for (int32_t e = 0; e < t; ++e) {
+      const int32_t* v = &m_.tets[4 * e];
+      double g[12];
+      bool moving = false;
+      for (int c = 0; c < 12; ++c) {
+        g[c] = gap[3 * v[c / 3] + c % 3];
+        moving = moving || g[c] != 0;
+      }
+      if (!moving) continue;
+      const double* k = &kbuf_[144 * static_cast<std::size_t>(e)];
+      for (int r = 0; r < 12; ++r) {
+        const int32_t row = sys_.free_index[3 * v[r / 3] + r % 3];
+        if (row < 0) continue;
+        double kg = 0;
+        for (int c = 0; c < 12; ++c) kg += k[12 * r + c] * g[c];
+        b[row] -= kg;
+      }
+    }
+  }
+
+  // Newton at load factor s from u, whose held components may still sit at an earlier factor's
+  // values. While they do (a non-zero gap), an iteration is a lifted (consistent) predictor: the
+  // held components move to their targets and the free ones follow through the tangent,
+  // K_ff du_f = r_f - K_fh gap, so a grab's displacement spreads over the mesh in one linear step
+  // instead of shearing the elements next to the grabbed nodes; it takes the longest step alpha = 1,
+  // 1/2, ... that inverts no element (no residual test: the residual at the old held values is not
+  // comparable). Then plain Newton iterations with the backtracking line search on ||r||.
   bool newton(std::vector<double>& u, double s, FemStaticReport& rep, std::string& failure) {
-    Eigen::VectorXd r, du, r_trial;
+    Eigen::VectorXd r, du, r_trial, b;
     const int32_t inv0 = residual(u, s, r);
     if (inv0 >= 0) {
       failure = element_text(m_, inv0) + " inverted at load factor " + std::to_string(s);
@@ -275,8 +330,9 @@ class Solver {
     double rnorm = r.norm();
     rep.residual_history.push_back(rnorm);
     const bool linear = m_.material.model == FemMaterialModel::linear;
-    std::vector<double> trial(u.size());
-    if (rnorm <= o_.residual_tolerance * rep.reference_residual) return true;  // already in equilibrium
+    std::vector<double> trial(u.size()), gap(u.size());
+    bool lifting = held_gap(u, s, gap);
+    if (!lifting && rnorm <= o_.residual_tolerance * rep.reference_residual) return true;  // already in equilibrium
     for (int it = 0; it < o_.max_newton_iterations; ++it) {
       auto t0 = Clock::now();
       const int32_t inv = assemble(u);
@@ -285,10 +341,12 @@ class Solver {
         failure = element_text(m_, inv) + " inverted at load factor " + std::to_string(s);
         return false;
       }
+      b = r;
+      if (lifting) lift(gap, b);
       t0 = Clock::now();
       const int cg_it = o_.preconditioner == FemPreconditioner::diagonal
-                            ? solve_with<Eigen::DiagonalPreconditioner<double>>(du, r)
-                            : solve_with<Eigen::IncompleteCholesky<double, Eigen::Lower, Eigen::AMDOrdering<int>>>(du, r);
+                            ? solve_with<Eigen::DiagonalPreconditioner<double>>(du, b)
+                            : solve_with<Eigen::IncompleteCholesky<double, Eigen::Lower, Eigen::AMDOrdering<int>>>(du, b);
       rep.solve_seconds += seconds_since(t0);
       rep.cg_iterations.push_back(cg_it);
       ++rep.newton_iterations;
@@ -296,18 +354,20 @@ class Solver {
         failure = "the linear solve gave non-finite values at load factor " + std::to_string(s);
         return false;
       }
-      // Backtracking line search on ||r||.
+      // Line search: backtracking on ||r||, or (lifting) the longest step that inverts nothing.
       double alpha = 1;
       bool accepted = false;
       int32_t inverted = -1;
       for (int ls = 0; ls <= o_.max_line_search; ++ls, alpha *= 0.5) {
         trial = u;
         Eigen::Index k = 0;
-        for (std::size_t d = 0; d < u.size(); ++d)
+        for (std::size_t d = 0; d < u.size(); ++d) {
           if (!held_[d]) trial[d] += alpha * du[k++];
+          else if (lifting) trial[d] = alpha == 1 ? s * target_[d] : u[d] + alpha * gap[d];  // exact at alpha = 1
+        }
         inverted = residual(trial, s, r_trial);
         if (inverted >= 0) continue;
-        if (r_trial.norm() < rnorm || linear) {
+        if (lifting || r_trial.norm() < rnorm || linear) {
           accepted = true;
           break;
         }
@@ -323,10 +383,12 @@ class Solver {
       rep.residual_history.push_back(rnorm);
       const double step_inf = alpha * du.lpNorm<Eigen::Infinity>();
       const bool small_residual = rnorm <= o_.residual_tolerance * rep.reference_residual;
-      // Linear: K is exact, so one step solves the system to the CG tolerance (the recursively updated
-      // CG residual can sit slightly above residual_tolerance in the true residual; a second step would
-      // only repeat the solve).
-      if (linear || (small_residual && step_inf <= o_.displacement_tolerance * diag_)) return true;
+      lifting = held_gap(u, s, gap);
+      if (lifting) continue;
+      // Linear: K is exact, so one full step solves the system to the CG tolerance (the recursively
+      // updated CG residual can sit slightly above residual_tolerance in the true residual; a second
+      // step would only repeat the solve).
+      if ((linear && alpha == 1) || (small_residual && step_inf <= o_.displacement_tolerance * diag_)) return true;
     }
     failure = "Newton did not converge in " + std::to_string(o_.max_newton_iterations) + " iterations at load factor " +
               std::to_string(s) + " (relative residual " + std::to_string(rnorm / rep.reference_residual) + ")";

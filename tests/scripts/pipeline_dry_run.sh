@@ -43,9 +43,9 @@ if grep -q -- "--grid" "$WORK/fem.plan"; then fail "fem: ctsurg-sim was given a 
 [[ -f "$WORK/out/springs/mk/springs.mk" ]] || fail "no fragment written"
 ls "$WORK"/out/*/mk/*.tmp* 2>/dev/null && fail "temporary fragment left behind"
 
-# The bundled patients plan as documented (the heart's scenarios never need a tet mesh).
+# The bundled patients plan as documented (heart_fem_grab needs the heart's tet mesh).
 got=$(mk -n heart PATIENTS_DIR="$ROOT/data_samples/patients" OUT="$WORK/bundled" | grep -o 'ctsurg-[a-z]*' | sort -u | tr '\n' ' ')
-[[ "$got" == "ctsurg-grid ctsurg-import ctsurg-normalmap ctsurg-render ctsurg-sim ctsurg-surface " ]] || fail "heart: [$got]"
+[[ "$got" == "ctsurg-grid ctsurg-import ctsurg-normalmap ctsurg-render ctsurg-sim ctsurg-surface ctsurg-tetmesh " ]] || fail "heart: [$got]"
 echo "ok: heart plan: $got"
 # The batch's other patients read ../shared/data: the kidney needs the tet mesh (FEM) and the table,
 # the head (a spring grid without pictures) neither a normal map nor a tet mesh nor a render.

@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <string>
@@ -192,7 +193,7 @@ TEST(FemStaticSolver, NeoHookeanUniaxialStretchMatchesClosedForm) {
   EXPECT_LT(h.back(), 1e-8 * res.report.reference_residual);
 }
 
-TEST(FemStaticSolver, GrabWithLargeDisplacementUsesLoadSteppingAndBalances) {
+TEST(FemStaticSolver, GrabWithLargeDisplacementConvergesAndBalances) {
   const auto box = fem_box_mesh({4, 4, 4}, {8, 8, 8});
   const FemModel m = build_fem_model(box.nodes, box.tets, material(FemMaterialModel::neo_hookean, 3e4, 0.45));
   FemBoundaryConditions bc;
@@ -218,6 +219,48 @@ TEST(FemStaticSolver, GrabWithLargeDisplacementUsesLoadSteppingAndBalances) {
     EXPECT_DOUBLE_EQ(res.displacements[3 * bc.prescribed_nodes[g] + 2], 4.0);
   std::printf("grab 4 mm up of a 8 mm neo-Hookean block: %d load steps, %d halvings, %d Newton iterations\n",
               res.report.load_steps, res.report.halvings, res.report.newton_iterations);
+}
+
+TEST(FemStaticSolver, WarmStartFromANearbySolutionGivesTheSameEquilibriumInFewerIterations) {
+  const auto box = fem_box_mesh({4, 4, 4}, {8, 8, 8});
+  const FemModel m = build_fem_model(box.nodes, box.tets, material(FemMaterialModel::neo_hookean, 3e4, 0.45));
+  FemBoundaryConditions bc;
+  bc.fixed_nodes = nodes_where(m, 2, 0.0);
+  const auto grab = [&](double up) {
+    bc.prescribed_nodes.clear();
+    bc.prescribed_displacements.clear();
+    for (int32_t i : nodes_where(m, 2, 8.0)) {
+      if (std::hypot(m.nodes[3 * i] - 4, m.nodes[3 * i + 1] - 4) > 2.01) continue;
+      bc.prescribed_nodes.push_back(i);
+      bc.prescribed_displacements.insert(bc.prescribed_displacements.end(), {0.5, 0.0, up});
+    }
+  };
+  grab(2.0);
+  const auto previous = solve_fem_static(m, bc, {});
+  grab(2.4);
+  const auto cold = solve_fem_static(m, bc, {});
+  FemStaticOptions o;
+  o.initial_displacements = previous.displacements;
+  const auto warm = solve_fem_static(m, bc, {}, o);
+  ASSERT_TRUE(cold.report.converged);
+  ASSERT_TRUE(warm.report.converged);
+  EXPECT_FALSE(warm.report.warm_start_failed);
+  EXPECT_LT(warm.report.newton_iterations, cold.report.newton_iterations);
+  double diff = 0, scale = 0;
+  for (std::size_t d = 0; d < cold.displacements.size(); ++d) {
+    diff = std::max(diff, std::abs(cold.displacements[d] - warm.displacements[d]));
+    scale = std::max(scale, std::abs(cold.displacements[d]));
+  }
+  EXPECT_LT(diff, 1e-6 * scale);
+  std::printf("grab 2.0 -> 2.4 mm: cold %d Newton iterations, warm %d\n", cold.report.newton_iterations,
+              warm.report.newton_iterations);
+  o.initial_displacements.pop_back();
+  try {
+    solve_fem_static(m, bc, {}, o);
+    ADD_FAILURE() << "a short initial_displacements was accepted";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.field(), "initial_displacements");
+  }
 }
 
 TEST(FemStaticSolver, MissingOrInsufficientBoundaryConditionsAreInputErrors) {
