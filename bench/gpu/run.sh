@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # One command on a machine with a CUDA GPU (docs/gpu.md): builds ctsurg with CUDA, runs the gpu tests
-# (CPU vs GPU agreement), the same tests under compute-sanitizer memcheck and racecheck, and the
-# DeviceSimulation benchmark, and writes a markdown report for docs/benchmarks.md.
+# (CPU vs GPU agreement: spring models, scenarios, the FEM's explicit step and static CG), the device
+# tests under compute-sanitizer memcheck, racecheck and synccheck, and the DeviceSimulation and FEM
+# device benchmarks, and writes a markdown report for docs/benchmarks.md.
 #
 #   bench/gpu/run.sh [build-dir]        (default build-gpu; report in <build-dir>/gpu-report.md)
 #
@@ -31,9 +32,9 @@ step configure cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release -DCTSU
   "-DCMAKE_CUDA_ARCHITECTURES=$archs"
 step build cmake --build "$build" -j "$jobs" --target test_device_simulation test_backend test_spring_mass_step \
   test_explicit_spring_model test_sphere_tools test_spring_cutting test_surface_coupling test_scenario_gpu ctsurg-sim \
-  bench_device_simulation
+  test_fem_device test_fem_explicit_dynamics test_fem_static_solver bench_device_simulation bench_fem_device
 step tests-gpu ctest --test-dir "$build" -L gpu --output-on-failure --no-tests=error
-step tests-cpu-kernels ctest --test-dir "$build" -L unit -R 'Backend|SpringMassStep|ExplicitSpring|SphereTools|SpringCutting|SurfaceCoupling' --output-on-failure
+step tests-cpu-kernels ctest --test-dir "$build" -L unit -R 'Backend|SpringMassStep|ExplicitSpring|SphereTools|SpringCutting|SurfaceCoupling|FemExplicitDynamics|FemStaticSolver' --output-on-failure
 # No test may be skipped here: the GPU is present, so a skip means the device was not found.
 step no-skips bash -c "! grep -q 'Skipped' '$build/tests-gpu.log'"
 if command -v compute-sanitizer >/dev/null 2>&1; then
@@ -44,17 +45,21 @@ else
   sanitizer=""
 fi
 if [ -n "$sanitizer" ]; then
-  step memcheck "$sanitizer" --tool memcheck --error-exitcode 1 --leak-check full "$build/bin/test_device_simulation"
-  step racecheck "$sanitizer" --tool racecheck --error-exitcode 1 "$build/bin/test_device_simulation"
-  step synccheck "$sanitizer" --tool synccheck --error-exitcode 1 "$build/bin/test_device_simulation"
+  for test in test_device_simulation test_fem_device; do
+    step "memcheck-$test" "$sanitizer" --tool memcheck --error-exitcode 1 --leak-check full "$build/bin/$test"
+    step "racecheck-$test" "$sanitizer" --tool racecheck --error-exitcode 1 "$build/bin/$test"
+    step "synccheck-$test" "$sanitizer" --tool synccheck --error-exitcode 1 "$build/bin/$test"
+  done
 else
   results+=("| compute-sanitizer | **not found** |"); status=1
 fi
 step bench "$build/bin/bench_device_simulation" --benchmark_format=console --benchmark_out_format=json \
   "--benchmark_out=$build/bench_device_simulation.json" "--benchmark_min_time=${min_time}"
+step bench-fem "$build/bin/bench_fem_device" --benchmark_format=console --benchmark_out_format=json \
+  "--benchmark_out=$build/bench_fem_device.json" "--benchmark_min_time=${min_time}"
 
 {
-  echo "## GPU: DeviceSimulation (bench/gpu/run.sh, $(date -u +%Y-%m-%d))"
+  echo "## GPU: DeviceSimulation and the FEM (bench/gpu/run.sh, $(date -u +%Y-%m-%d))"
   echo
   echo '```'
   cat "$build/nvidia-smi.txt"
@@ -82,6 +87,34 @@ for b in data["benchmarks"]:
 print()
 print("Targets (issue 6): 100k particles >= 50,000 iterations/s; 10M particles >= 60% of the peak bandwidth "
       "with the bytes per particle per step stated in bench/bench_device_simulation.cpp.")
+PY
+  fi
+  if [ -s "$build/bench_fem_device.json" ]; then
+    echo
+    python3 - "$build/bench_fem_device.json" <<'PY'
+import json, sys
+runs = [b for b in json.load(open(sys.argv[1]))["benchmarks"] if b.get("run_type") != "aggregate"]
+print("FEM explicit step on the device (Neo-Hookean, bench/bench_fem_device.cpp):")
+print()
+print("| tets | steps/s | element updates/s | B/element/step | GB/s | of peak |")
+print("|---:|---:|---:|---:|---:|---:|")
+for b in runs:
+    if "Explicit" not in b["name"]:
+        continue
+    peak = b.get("peak_GB/s", 0)
+    frac = f'{100 * b["GB/s"] / peak:.0f}%' if peak else "n/a"
+    print(f'| {int(b["tets"]):,} | {b["items_per_second"]:,.0f} | {b["element_updates/s"]:.3g} | '
+          f'{b["bytes_per_element"]:.0f} | {b["GB/s"]:.0f} | {frac} |')
+print()
+print("Static linear solve, Jacobi CG (cube of n^3 cells, top centre grabbed 2 mm; bench_fem's static_solve):")
+print()
+print("| vertices | tets | backend | solve ms | Newton its | CG its | CG ms | assembly ms |")
+print("|---:|---:|---|---:|---:|---:|---:|---:|")
+for b in runs:
+    if "Static" not in b["name"]:
+        continue
+    print(f'| {int(b["vertices"]):,} | {int(b["tets"]):,} | {b.get("label", "")} | {b["real_time"]:.1f} | '
+          f'{int(b["newton_its"])} | {int(b["cg_its"])} | {b["cg_ms"]:.1f} | {b["assembly_ms"]:.1f} |')
 PY
   fi
 } >"$report"

@@ -18,6 +18,8 @@
 // frame slots (device and pinned) alternate; an event per slot orders reuse.
 #include "device_simulation_cuda.cuh"
 
+#include "cuda_support.cuh"
+
 #include "particle_normals_impl.h"
 #include "sphere_tools_impl.h"
 #include "spring_cutting_impl.h"
@@ -34,23 +36,7 @@
 #include <string>
 #include <utility>
 
-// Throws RuntimeError("file:line: call: cudaErrorName: description") unless `call` succeeded.
-#define CTSURG_CUDA_CHECK(call) ::ctsurg::sim::cuda_check((call), #call, __FILE__, __LINE__)
-// After a kernel launch: the launch error; in debug builds also the kernel's own (synchronising).
-#if defined(NDEBUG)
-#define CTSURG_CUDA_LAUNCHED(stream) CTSURG_CUDA_CHECK(cudaGetLastError())
-#else
-#define CTSURG_CUDA_LAUNCHED(stream) \
-  (CTSURG_CUDA_CHECK(cudaGetLastError()), CTSURG_CUDA_CHECK(cudaStreamSynchronize(stream)))
-#endif
-
 namespace ctsurg::sim {
-
-void cuda_check(cudaError_t error, const char* call, const char* file, int line) {
-  if (error == cudaSuccess) return;
-  throw RuntimeError(std::string(file) + ":" + std::to_string(line) + ": " + call + ": " + cudaGetErrorName(error) +
-                     ": " + cudaGetErrorString(error));
-}
 
 namespace {
 
@@ -63,52 +49,10 @@ constexpr int64_t kGraphSteps = 48;
 constexpr int64_t kGraphSteps = 0;  // debug: direct launches, so that each can be synchronised
 #endif
 
-int blocks_for(int64_t n) { return static_cast<int>((n + kBlock - 1) / kBlock); }
+int blocks_for(int64_t n) { return static_cast<int>(cuda::blocks_for(n, kBlock)); }
 
-// Destructors release without throwing: a failed release is reported, not raised.
-void release_check(cudaError_t error, const char* call) {
-  if (error != cudaSuccess && error != cudaErrorCudartUnloading)
-    std::fprintf(stderr, "ctsurg: %s failed while releasing: %s\n", call, cudaGetErrorString(error));
-}
-
-// A device array of T (no construction: trivially copyable element types only).
-template <class T>
-class DeviceBuffer {
- public:
-  DeviceBuffer() = default;
-  ~DeviceBuffer() { reset(); }
-  DeviceBuffer(const DeviceBuffer&) = delete;
-  DeviceBuffer& operator=(const DeviceBuffer&) = delete;
-
-  void reset() {
-    if (data_ != nullptr) release_check(cudaFree(data_), "cudaFree");
-    data_ = nullptr, size_ = 0;
-  }
-  void resize(std::size_t n) {
-    if (n == size_) return;
-    reset();
-    if (n > 0) CTSURG_CUDA_CHECK(cudaMalloc(reinterpret_cast<void**>(&data_), n * sizeof(T)));
-    size_ = n;
-  }
-  // Resizes to n and copies n elements from host memory, in order on `stream`.
-  void upload(const T* host, std::size_t n, cudaStream_t stream) {
-    resize(n);
-    if (n > 0) CTSURG_CUDA_CHECK(cudaMemcpyAsync(data_, host, n * sizeof(T), cudaMemcpyHostToDevice, stream));
-  }
-  template <class V>
-  void upload(const V& host, cudaStream_t stream) {
-    upload(host.data(), host.size(), stream);
-  }
-  void download(T* host, std::size_t n, cudaStream_t stream) const {
-    if (n > 0) CTSURG_CUDA_CHECK(cudaMemcpyAsync(host, data_, n * sizeof(T), cudaMemcpyDeviceToHost, stream));
-  }
-  T* data() const { return data_; }
-  std::size_t size() const { return size_; }
-
- private:
-  T* data_ = nullptr;
-  std::size_t size_ = 0;
-};
+using cuda::DeviceBuffer;
+using cuda::release_check;
 
 // ---- Kernels: one thread per index, each calling the per-index function of the CPU launchers. ----
 

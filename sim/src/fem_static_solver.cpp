@@ -1,6 +1,7 @@
 #include "ctsurg/sim/fem_static_solver.h"
 
 #include "cpu_kernels.h"
+#include "device_conjugate_gradient.h"
 #include "fem_cpu_kernels.h"
 #include "fem_rigid_modes.h"
 
@@ -14,6 +15,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <memory>
 #include <sstream>
 #include <string>
 
@@ -137,8 +139,10 @@ std::string element_text(const FemModel& model, int32_t e) {
 
 class Solver {
  public:
-  Solver(const FemModel& model, const FemBoundaryConditions& bc, const FemLoads& loads, const FemStaticOptions& o)
-      : m_(model), o_(o), threads_(o.threads > 0 ? o.threads : cpu::thread_count(0, model.tet_count())) {
+  Solver(const FemModel& model, const FemBoundaryConditions& bc, const FemLoads& loads, const FemStaticOptions& o,
+         DeviceConjugateGradient* device_cg)
+      : m_(model), o_(o), threads_(o.threads > 0 ? o.threads : cpu::thread_count(0, model.tet_count())),
+        device_cg_(device_cg) {
     const int32_t n = model.node_count();
     held_.assign(3 * static_cast<std::size_t>(n), 0);
     target_.assign(3 * static_cast<std::size_t>(n), 0.0);
@@ -279,6 +283,18 @@ class Solver {
     return static_cast<int>(cg.iterations());
   }
 
+  // The same solve on the device (Backend::cuda, Jacobi, Eigen's iteration and stopping rule): the
+  // pattern goes up at the first solve (run() builds it once), the values at every solve (one per
+  // assembly).
+  int solve_on_device(Eigen::VectorXd& du, const Eigen::VectorXd& r) {
+    const auto rows = static_cast<int32_t>(sys_.k.rows());
+    if (!device_cg_->has_pattern()) device_cg_->set_pattern(rows, sys_.k.outerIndexPtr(), sys_.k.innerIndexPtr());
+    device_cg_->set_values(sys_.k.valuePtr());
+    du.resize(rows);
+    const int64_t max_iterations = o_.cg_max_iterations > 0 ? o_.cg_max_iterations : 2 * static_cast<int64_t>(rows);
+    return static_cast<int>(device_cg_->solve(r.data(), du.data(), o_.cg_tolerance, max_iterations).iterations);
+  }
+
   // gap = s target - u on the held components (0 elsewhere); returns whether any is non-zero.
   bool held_gap(const std::vector<double>& u, double s, std::vector<double>& gap) const {
     bool any = false;
@@ -344,7 +360,8 @@ class Solver {
       b = r;
       if (lifting) lift(gap, b);
       t0 = Clock::now();
-      const int cg_it = o_.preconditioner == FemPreconditioner::diagonal
+      const int cg_it = device_cg_ != nullptr ? solve_on_device(du, b)
+                        : o_.preconditioner == FemPreconditioner::diagonal
                             ? solve_with<Eigen::DiagonalPreconditioner<double>>(du, b)
                             : solve_with<Eigen::IncompleteCholesky<double, Eigen::Lower, Eigen::AMDOrdering<int>>>(du, b);
       rep.solve_seconds += seconds_since(t0);
@@ -404,15 +421,24 @@ class Solver {
   std::vector<double> target_, external_, corner_, forces_, kbuf_;
   FemElementView<double> el_{};
   System sys_;
+  DeviceConjugateGradient* device_cg_;  // Backend::cuda: the linear solves on the device; null for cpu
 };
 
 }  // namespace
 
 FemStaticResult solve_fem_static(const FemModel& model, const FemBoundaryConditions& bc, const FemLoads& loads,
                                  const FemStaticOptions& options, Backend backend) {
-  require_backend(backend, kWhere);
+  if (!backend_available(backend)) require_backend(backend, kWhere);  // cuda without a CUDA build or device: says why
+  std::unique_ptr<DeviceConjugateGradient> device_cg;
+  if (backend == Backend::cuda) {
+    if (options.preconditioner != FemPreconditioner::diagonal)
+      throw InputError(kWhere, "preconditioner",
+                       "the cuda backend's conjugate gradient is diagonal (Jacobi) preconditioned; use diagonal, or "
+                       "incomplete_cholesky on the cpu backend");
+    device_cg = std::make_unique<DeviceConjugateGradient>(kWhere);
+  }
   validate(model, bc, loads, options);
-  Solver solver(model, bc, loads, options);
+  Solver solver(model, bc, loads, options, device_cg.get());
   return solver.run();
 }
 

@@ -164,3 +164,34 @@ TEST(FemExplicitDynamics, SphereProbeKeepsNodesOutside) {
 
 }  // namespace
 }  // namespace ctsurg::sim
+
+namespace ctsurg::sim {
+namespace {
+
+// The energy-growth guard: free fall from rest quadruples the kinetic energy between the checks at
+// steps 16 and 32 (v grows linearly), above an allowed growth of 1.5, so the run stops after step 32
+// with the message, the state finite.
+TEST(FemExplicitDynamics, EnergyGrowthAboveTheLimitStopsTheRun) {
+  const auto box = fem_box_mesh({2, 2, 2}, {4, 4, 4});
+  FemMaterial mat;
+  mat.model = FemMaterialModel::linear;
+  mat.youngs_modulus = 3e4;
+  mat.poisson_ratio = 0.3;
+  const FemModel m = build_fem_model(box.nodes, box.tets, mat);
+  FemDynamicsOptions o;
+  o.gravity = {0, 0, -9810};
+  o.energy_growth = 1.5;
+  o.energy_floor = 0;
+  FemExplicitDynamics d(m, o);
+  try {
+    d.step(100);
+    ADD_FAILURE() << "no energy growth reported";
+  } catch (const RuntimeError& e) {
+    EXPECT_NE(std::string(e.what()).find("kinetic energy grew"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(d.steps_taken(), 32);
+  for (double u : d.displacements()) EXPECT_TRUE(std::isfinite(u));
+}
+
+}  // namespace
+}  // namespace ctsurg::sim

@@ -27,8 +27,9 @@ bool backend_available(Backend backend);
 Backend resolve_backend(const std::string& name, const std::string& where = "backend");
 
 // Throws InputError(where, "backend", "...") unless the dispatcher `where`, which works on host
-// arrays (step, probe_sphere, move_surface, the FEM solvers, ...), can run `backend`. That is cpu
-// always, and cuda never: without CUDA the message says so ("cuda was asked for but this build has no
+// arrays (step, probe_sphere, move_surface, ...), can run `backend`. That is cpu always, and cuda
+// never (FemExplicitDynamics and solve_fem_static call it only where cuda cannot run, and run on the
+// device otherwise): without CUDA the message says so ("cuda was asked for but this build has no
 // CUDA kernels (CTSURG_CUDA is OFF or nvcc was absent at configure time); use cpu or auto", or "... but
 // no CUDA device was found ..."); with a device it names DeviceSimulation (device_simulation.h), the
 // CUDA backend, which keeps the state on the device. Every dispatcher calls it first, so asking for

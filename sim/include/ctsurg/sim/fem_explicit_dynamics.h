@@ -21,6 +21,14 @@
 // RuntimeError naming the time, the element or node, its rest position, and a suggested step. The step
 // that would break is not applied: the state stays finite.
 //
+// Backends. cpu: OpenMP over elements, then nodes (`threads`). cuda: the state (displacements, corner
+// forces, masses, element and node data, tools) lives on CUDA device 0 for the object's life and step(n)
+// runs the same per-element and per-node kernels there (src/fem_device_dynamics.h), waiting for the
+// device once per call; the guard is checked on the device with the same rule, rollback and messages
+// (an inverted element or non-finite node leaves the state before the failing step, exactly as on the
+// CPU). Accessors download on request. `threads` is ignored. In a build without CUDA, or without a
+// device, asking for cuda is InputError("fem dynamics", "backend", ...).
+//
 // Units: mm, g, s; forces uN, energies nJ, damping 1/s, gravity mm/s^2.
 #pragma once
 
@@ -30,9 +38,12 @@
 
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 namespace ctsurg::sim {
+
+class FemDeviceDynamics;  // src/fem_device_dynamics.h: the Backend::cuda state (no CUDA types here)
 
 struct FemCriticalStep {
   double critical = 0;        // s, min_e h_e / c
@@ -59,9 +70,14 @@ struct FemDynamicsOptions {
 
 class FemExplicitDynamics {
  public:
-  // Throws InputError("fem dynamics", field, ...) for options out of range, or a dt above the
-  // critical step (field "dt"). The model must outlive this object. Starts at rest (u = 0).
+  // Throws InputError("fem dynamics", field, ...) for a backend that cannot run here ("backend"),
+  // options out of range, or a dt above the critical step (field "dt"). The model must outlive this
+  // object. Starts at rest (u = 0).
   FemExplicitDynamics(const FemModel& model, const FemDynamicsOptions& options = {}, Backend backend = Backend::cpu);
+  ~FemExplicitDynamics();
+  FemExplicitDynamics(FemExplicitDynamics&&) noexcept;
+  FemExplicitDynamics(const FemExplicitDynamics&) = delete;
+  FemExplicitDynamics& operator=(const FemExplicitDynamics&) = delete;
 
   // Holds `nodes` at zero displacement (replaces the previous fixed set).
   void set_fixed_nodes(const std::vector<int32_t>& nodes);
@@ -83,8 +99,9 @@ class FemExplicitDynamics {
   int64_t contacts() const { return contacts_; }   // nodes moved by the sphere in the last step
   std::vector<double> displacements() const;       // #N x 3 mm
   std::vector<double> positions() const;           // #N x 3 LPS mm, rest + u
-  const std::vector<Real>& raw_displacements() const { return u_; }  // #N x 3, Real
-  // Kinetic energy sum_i m_i |u_i(t) - u_i(t - dt)|^2 / (2 dt^2), nJ (backward-difference velocity).
+  std::vector<Real> raw_displacements() const;     // #N x 3 mm, Real (the step's own values)
+  // Kinetic energy sum_i m_i |u_i(t) - u_i(t - dt)|^2 / (2 dt^2), nJ (backward-difference velocity;
+  // cuda: the guard's device sum, whose order of additions differs from the CPU's serial sum).
   double kinetic_energy() const;
   double strain_energy() const;                    // nJ (fem_strain_energy)
   // The nodal internal forces of the current state as the step computes them (float), #N x 3 uN.
@@ -92,17 +109,20 @@ class FemExplicitDynamics {
 
  private:
   void update_inverse_mass();
+  void step_on_device(int steps);
 
   const FemModel& model_;
   FemDynamicsOptions options_;
   double dt_ = 0, time_ = 0, last_energy_ = -1;
   int64_t steps_ = 0, contacts_ = 0;
   std::vector<Real> dm_inverse_, volume_;          // Real copies of the model's element data
-  std::vector<Real> u_, u_prev_, u_next_, corner_forces_, inv_mass_, external_;
+  std::vector<Real> u_, u_prev_, u_next_, corner_forces_;  // cpu: the state (empty for cuda)
+  std::vector<Real> inv_mass_, external_;
   std::vector<uint8_t> fixed_;
   std::vector<int32_t> prescribed_nodes_;
   std::vector<Real> prescribed_;
   std::array<double, 4> sphere_{0, 0, 0, 0};
+  std::unique_ptr<FemDeviceDynamics> device_;  // cuda: the state on the device; null for cpu
 };
 
 }  // namespace ctsurg::sim

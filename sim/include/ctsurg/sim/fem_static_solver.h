@@ -88,6 +88,9 @@ struct FemStaticResult {
   FemStaticReport report;
 };
 
+// backend cuda: the same Newton iterations with the conjugate gradients on the device (Jacobi, Eigen's
+// iteration and stopping rule; src/device_conjugate_gradient.h); InputError("fem static", "backend",
+// ...) where cuda cannot run, InputError(..., "preconditioner", ...) for incomplete_cholesky with cuda.
 // Throws InputError("fem static", field, ...) before solving: initial_displacements not #N x 3 or not
 // finite ("initial_displacements"), node ids out of range or
 // prescribed_displacements not #G x 3 ("fixed_nodes", "fixed_components", "prescribed_nodes",
