@@ -56,6 +56,9 @@ struct FemStaticOptions {
   int max_halvings = 8;                  // halvings of a failed increment before giving up
   int max_line_search = 8;               // halvings of alpha
   double cg_tolerance = 1e-10;           // relative residual of each linear solve, ||K du - r|| / ||r||
+  // Nonlinear laws: solve each Newton step only to min(1e-2, ||r|| / r_ref) (at least cg_tolerance),
+  // an Eisenstat-Walker-style forcing term; false: cg_tolerance always. The linear law ignores it.
+  bool inexact_newton = true;
   int cg_max_iterations = 0;             // 0 = Eigen's default (2 x free components)
   FemPreconditioner preconditioner = FemPreconditioner::diagonal;
   int threads = 0;                       // 0 = OpenMP's default
