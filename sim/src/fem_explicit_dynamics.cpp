@@ -173,10 +173,11 @@ void FemExplicitDynamics::set_prescribed(const std::vector<int32_t>& nodes, cons
     if (i < 0 || i >= model_.node_count()) throw InputError(kWhere, "prescribed_nodes", "node id " + std::to_string(i) + " out of range");
   for (double d : displacements)
     if (!std::isfinite(d)) throw InputError(kWhere, "prescribed_displacements", "must be finite");
+  const bool same_nodes = nodes == prescribed_nodes_;
   prescribed_nodes_ = nodes;
   prescribed_.assign(displacements.begin(), displacements.end());
   if (device_) device_->set_prescribed(prescribed_nodes_, prescribed_);
-  update_inverse_mass();
+  if (!same_nodes) update_inverse_mass();  // a moving grab (same nodes, new values) keeps the masses
 }
 
 void FemExplicitDynamics::clear_prescribed() {

@@ -48,7 +48,7 @@ int32_t fem_stiffness(const FemElementView<double>& el, const double* u, double*
     double ue[12];
     for (int a = 0; a < 4; ++a)
       for (int c = 0; c < 3; ++c) ue[3 * a + c] = u[3 * el.tets[4 * e + a] + c];
-    if (!fem_element_stiffness(el.model, el.mu, el.lambda, ue, el.dm_inverse + 9 * e, el.volume[e], k + 144 * e) &&
+    if (!fem_element_stiffness(el.model, el.mu, el.lambda, ue, el.dm_inverse + 9 * e, el.volume[e], k + 144 * static_cast<int64_t>(e)) &&
         e < first)
       first = e;
   }

@@ -31,8 +31,11 @@ FemModel build_fem_model(const std::vector<double>& nodes, const std::vector<int
   if (nodes.size() % 3 != 0) throw InputError(kWhere, "nodes", "expected #N x 3 coordinates, got " + std::to_string(nodes.size()) + " values");
   if (tets.size() % 4 != 0) throw InputError(kWhere, "tets", "expected #T x 4 node ids, got " + std::to_string(tets.size()) + " values");
   if (tets.empty()) throw InputError(kWhere, "tets", "the mesh has no tetrahedra");
-  if (nodes.size() / 3 > static_cast<std::size_t>(INT32_MAX / 4) || tets.size() > static_cast<std::size_t>(INT32_MAX))
-    throw InputError(kWhere, "tets", "mesh too large for 32-bit ids");
+  // The kernels index corner forces as 12 e + 3 a in int32 (fem_forces_impl.h): at most INT32_MAX / 12
+  // tets (178 million).
+  if (nodes.size() / 3 > static_cast<std::size_t>(INT32_MAX / 4) || tets.size() / 4 > static_cast<std::size_t>(INT32_MAX / 12))
+    throw InputError(kWhere, "tets", "mesh too large: at most " + std::to_string(INT32_MAX / 12) + " tets and " +
+                                         std::to_string(INT32_MAX / 4) + " nodes (32-bit corner indices)");
   for (std::size_t i = 0; i < nodes.size(); ++i)
     if (!std::isfinite(nodes[i])) throw InputError(kWhere, "nodes", "node " + std::to_string(i / 3) + " is not finite");
 
