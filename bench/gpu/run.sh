@@ -1,8 +1,10 @@
 #!/usr/bin/env bash
 # One command on a machine with a CUDA GPU (docs/gpu.md): builds ctsurg with CUDA, runs the gpu tests
 # (CPU vs GPU agreement: spring models, scenarios, the FEM's explicit step and static CG), the device
-# tests under compute-sanitizer memcheck, racecheck and synccheck, and the DeviceSimulation and FEM
-# device benchmarks, and writes a markdown report for docs/benchmarks.md.
+# tests under compute-sanitizer memcheck, racecheck and synccheck, the bundled heart's scenarios through
+# the pipeline on both backends (compared frame by frame), and the DeviceSimulation and FEM device
+# benchmarks, and writes a markdown report for docs/benchmarks.md. Needs the Debian packages of
+# scripts/install-deps.sh (h5py for the comparison) and the CUDA toolkit with compute-sanitizer.
 #
 #   bench/gpu/run.sh [build-dir]        (default build-gpu; report in <build-dir>/gpu-report.md)
 #
@@ -32,7 +34,8 @@ step configure cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release -DCTSU
   "-DCMAKE_CUDA_ARCHITECTURES=$archs"
 step build cmake --build "$build" -j "$jobs" --target test_device_simulation test_backend test_spring_mass_step \
   test_explicit_spring_model test_sphere_tools test_spring_cutting test_surface_coupling test_scenario_gpu ctsurg-sim \
-  test_fem_device test_fem_explicit_dynamics test_fem_static_solver bench_device_simulation bench_fem_device
+  test_fem_device test_fem_explicit_dynamics test_fem_static_solver bench_device_simulation bench_fem_device \
+  ctsurg-import ctsurg-grid ctsurg-surface ctsurg-normalmap ctsurg-tetmesh ctsurg-render
 step tests-gpu ctest --test-dir "$build" -L gpu --output-on-failure --no-tests=error
 step tests-cpu-kernels ctest --test-dir "$build" -L unit -R 'Backend|SpringMassStep|ExplicitSpring|SphereTools|SpringCutting|SurfaceCoupling|FemExplicitDynamics|FemStaticSolver' --output-on-failure
 # No test may be skipped here: the GPU is present, so a skip means the device was not found.
@@ -53,6 +56,12 @@ if [ -n "$sanitizer" ]; then
 else
   results+=("| compute-sanitizer | **not found** |"); status=1
 fi
+# The bundled heart's scenarios (data_samples/scenarios/heart_*.yaml: spring grid and explicit springs
+# with grabs, two retractors, a probe and a cut; Neo-Hookean FEM) through the pipeline on both
+# backends from the same files, compared frame by frame.
+step heart-cpu make -f scripts/Makefile -j"$jobs" demo "BUILD=$build" "DEMO_OUT=$build/heart-cpu" "SIM_ARGS=--backend cpu"
+step heart-cuda make -f scripts/Makefile -j"$jobs" demo "BUILD=$build" "DEMO_OUT=$build/heart-cuda" "SIM_ARGS=--backend cuda"
+step heart-compare python3 bench/gpu/compare_trajectories.py "$build/heart-cpu" "$build/heart-cuda"
 step bench "$build/bin/bench_device_simulation" --benchmark_format=console --benchmark_out_format=json \
   "--benchmark_out=$build/bench_device_simulation.json" "--benchmark_min_time=${min_time}"
 step bench-fem "$build/bin/bench_fem_device" --benchmark_format=console --benchmark_out_format=json \
@@ -70,6 +79,12 @@ step bench-fem "$build/bin/bench_fem_device" --benchmark_format=console --benchm
   echo "|---|---|"
   printf '%s\n' "${results[@]}"
   echo
+  if [ -s "$build/heart-compare.log" ]; then
+    echo "The heart scenarios, cpu against cuda (bench/gpu/compare_trajectories.py):"
+    echo
+    cat "$build/heart-compare.log"
+    echo
+  fi
   if [ -s "$build/bench_device_simulation.json" ]; then
     python3 - "$build/bench_device_simulation.json" <<'PY'
 import json, sys

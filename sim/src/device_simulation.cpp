@@ -105,20 +105,29 @@ int64_t DeviceSimulation::probe(const Sphere& tool) {
   return impl_->probe(s);
 }
 
-Grab DeviceSimulation::grab(const Sphere& tool) {
+Grab DeviceSimulation::grab(const Sphere& tool, int* handle) {
   const SphereView s = sphere_view(tool.centre, tool.radius, "device grab");
   if (impl_->kind == Impl::ModelKind::none) throw InputError("device grab", "model", "upload a model first");
-  return impl_->grab(s);
+  return impl_->grab(s, handle);
 }
 
-void DeviceSimulation::apply_grab(const std::array<double, 3>& centre) {
+void DeviceSimulation::apply_grab(const std::array<double, 3>& centre, int handle) {
   const SphereView s = sphere_view(centre, 1.0, "device grab");
-  if (!impl_->grab_held) throw InputError("device grab", "grab", "no grab is held (call grab() first)");
-  impl_->apply_grab(s);
+  const auto& held = impl_->grabs_held;
+  if (handle < 0 || static_cast<std::size_t>(handle) >= held.size() || !held[static_cast<std::size_t>(handle)])
+    throw InputError("device grab", "grab", "grab " + std::to_string(handle) + " is not held (call grab() first)");
+  impl_->apply_grab(handle, s);
 }
 
-void DeviceSimulation::release_grab() { impl_->release_grab(); }
-bool DeviceSimulation::grab_held() const { return impl_->grab_held; }
+void DeviceSimulation::release_grab(int handle) {
+  if (handle < -1) throw InputError("device grab", "grab", "handle " + std::to_string(handle) + " (use -1 for every grab)");
+  if (!impl_->grabs_held.empty()) impl_->release_grab(handle);
+}
+
+bool DeviceSimulation::grab_held() const {
+  const auto& held = impl_->grabs_held;
+  return std::any_of(held.begin(), held.end(), [](uint8_t h) { return h != 0; });
+}
 
 int64_t DeviceSimulation::cut_springs_crossing_triangle(const Triangle& blade) {
   TriangleView v{};
@@ -202,9 +211,9 @@ void DeviceSimulation::Impl::upload_state(const ParticleState&) { unreachable();
 void DeviceSimulation::Impl::step(int64_t, const VerletConstants&) { unreachable(); }
 void DeviceSimulation::Impl::normals(const VerletConstants&, ParticleNormals&) { unreachable(); }
 int64_t DeviceSimulation::Impl::probe(const SphereView&) { unreachable(); }
-Grab DeviceSimulation::Impl::grab(const SphereView&) { unreachable(); }
-void DeviceSimulation::Impl::apply_grab(const SphereView&) { unreachable(); }
-void DeviceSimulation::Impl::release_grab() { unreachable(); }
+Grab DeviceSimulation::Impl::grab(const SphereView&, int*) { unreachable(); }
+void DeviceSimulation::Impl::apply_grab(int, const SphereView&) { unreachable(); }
+void DeviceSimulation::Impl::release_grab(int) { unreachable(); }
 int64_t DeviceSimulation::Impl::cut(const TriangleView&) { unreachable(); }
 void DeviceSimulation::Impl::set_surface(const int32_t*, const Real*, const Real*, int64_t, const Real*) { unreachable(); }
 void DeviceSimulation::Impl::move_surface_async() { unreachable(); }

@@ -214,11 +214,15 @@ struct DeviceSimulation::Impl::Device {
   DeviceBuffer<uint8_t> alive;
   ExplicitSpringView springs{};
 
-  // Grab.
-  DeviceBuffer<int32_t> grab_ids;
-  DeviceBuffer<Real> grab_offsets;
-  DeviceBuffer<SphereView> grab_centre;  // one element
-  int64_t grab_count = 0;
+  // Grabs: one slot per held grab (a handle is a slot index; released slots are reused, lowest first).
+  struct GrabSlot {
+    DeviceBuffer<int32_t> ids;
+    DeviceBuffer<Real> offsets;
+    DeviceBuffer<SphereView> centre;  // one element
+    int64_t count = 0;
+    bool held = false;
+  };
+  std::vector<std::unique_ptr<GrabSlot>> grabs;
   DeviceBuffer<uint8_t> flags;
 
   // Counters of the tool kernels.
@@ -265,8 +269,13 @@ struct DeviceSimulation::Impl::Device {
   }
   Real* x(int a) const { return pos[cur][a].data(); }
 
-  // One step's kernels on `stream` (the grab after the spring step), then the rotation.
-  void launch_step(ModelKind kind, bool damped, const VerletConstants& c, bool grab_held, cudaStream_t stream) {
+  bool any_grab() const {
+    return std::any_of(grabs.begin(), grabs.end(), [](const auto& g) { return g->held && g->count > 0; });
+  }
+
+  // One step's kernels on `stream` (the grabs after the spring step, in handle order), then the
+  // rotation.
+  void launch_step(ModelKind kind, bool damped, const VerletConstants& c, cudaStream_t stream) {
     const ParticleStateView s = state_view();
     const int blocks = blocks_for(s.count);
     if (blocks > 0) {
@@ -284,10 +293,10 @@ struct DeviceSimulation::Impl::Device {
       CTSURG_CUDA_LAUNCHED(stream);
     }
     cur = (cur + 1) % 3;
-    if (grab_held && grab_count > 0) {
-      place_grabbed_kernel<<<blocks_for(grab_count), kBlock, 0, stream>>>(x(0), x(1), x(2), grab_ids.data(),
-                                                                          grab_offsets.data(), grab_count,
-                                                                          grab_centre.data());
+    for (const auto& g : grabs) {
+      if (!g->held || g->count == 0) continue;
+      place_grabbed_kernel<<<blocks_for(g->count), kBlock, 0, stream>>>(x(0), x(1), x(2), g->ids.data(), g->offsets.data(),
+                                                                         g->count, g->centre.data());
       CTSURG_CUDA_LAUNCHED(stream);
     }
   }
@@ -319,7 +328,6 @@ DeviceSimulation::Impl::Impl(int ordinal) {
     CTSURG_CUDA_CHECK(cudaEventCreateWithFlags(&d.copy_done[k], cudaEventDisableTiming));
   }
   d.counter.resize(1);
-  d.grab_centre.resize(1);
 }
 
 DeviceSimulation::Impl::~Impl() {
@@ -349,7 +357,7 @@ void DeviceSimulation::Impl::upload_state(const ParticleState& state) {
 
 void DeviceSimulation::Impl::upload_grid(const SpringGridModel& model, const ParticleState& state) {
   Device& d = *device;
-  release_grab();
+  release_grab(-1);
   surface_vertices = -1, frames_queued = 0;
   upload_state(state);
   d.neighbours.upload(model.neighbours, d.compute);
@@ -366,7 +374,7 @@ void DeviceSimulation::Impl::upload_grid(const SpringGridModel& model, const Par
 
 void DeviceSimulation::Impl::upload_explicit(const ExplicitSpringModel& model, const ParticleState& state) {
   Device& d = *device;
-  release_grab();
+  release_grab(-1);
   surface_vertices = -1, frames_queued = 0;
   upload_state(state);
   d.row_offsets.upload(model.row_offsets, d.compute);
@@ -393,10 +401,10 @@ void DeviceSimulation::Impl::upload_explicit(const ExplicitSpringModel& model, c
 void DeviceSimulation::Impl::step(int64_t steps, const VerletConstants& c) {
   Device& d = *device;
   CTSURG_CUDA_CHECK(cudaSetDevice(d.ordinal));
-  const bool grab = grab_held && d.grab_count > 0;
+  const bool grab = d.any_grab();  // the graph is dropped whenever the grab set changes
   int64_t left = steps;
   if (kGraphSteps > 0 && left >= kGraphSteps) {
-    while (d.cur != 0 && left > 0) d.launch_step(kind, spring_damping, c, grab, d.compute), --left;
+    while (d.cur != 0 && left > 0) d.launch_step(kind, spring_damping, c, d.compute), --left;
     const bool same = d.graph != nullptr && d.graph_grab == grab && d.graph_constants.dt2 == c.dt2 &&
                       d.graph_constants.inv_dt == c.inv_dt && d.graph_constants.keep == c.keep &&
                       d.graph_constants.gx == c.gx && d.graph_constants.gy == c.gy && d.graph_constants.gz == c.gz;
@@ -405,7 +413,7 @@ void DeviceSimulation::Impl::step(int64_t steps, const VerletConstants& c) {
       cudaGraph_t graph = nullptr;
       CTSURG_CUDA_CHECK(cudaStreamBeginCapture(d.compute, cudaStreamCaptureModeThreadLocal));
       try {
-        for (int64_t k = 0; k < kGraphSteps; ++k) d.launch_step(kind, spring_damping, c, grab, d.compute);
+        for (int64_t k = 0; k < kGraphSteps; ++k) d.launch_step(kind, spring_damping, c, d.compute);
       } catch (...) {
         (void)cudaStreamEndCapture(d.compute, &graph);
         if (graph != nullptr) (void)cudaGraphDestroy(graph);
@@ -420,7 +428,7 @@ void DeviceSimulation::Impl::step(int64_t steps, const VerletConstants& c) {
     }
     for (; left >= kGraphSteps; left -= kGraphSteps) CTSURG_CUDA_CHECK(cudaGraphLaunch(d.graph, d.compute));
   }
-  for (; left > 0; --left) d.launch_step(kind, spring_damping, c, grab, d.compute);
+  for (; left > 0; --left) d.launch_step(kind, spring_damping, c, d.compute);
 }
 
 void DeviceSimulation::Impl::normals(const VerletConstants& c, ParticleNormals& out) {
@@ -464,7 +472,7 @@ int64_t DeviceSimulation::Impl::probe(const SphereView& tool) {
   return static_cast<int64_t>(d.read_counter());
 }
 
-Grab DeviceSimulation::Impl::grab(const SphereView& tool) {
+Grab DeviceSimulation::Impl::grab(const SphereView& tool, int* handle) {
   Device& d = *device;
   CTSURG_CUDA_CHECK(cudaSetDevice(d.ordinal));
   d.flags.resize(static_cast<std::size_t>(particles));
@@ -476,44 +484,59 @@ Grab DeviceSimulation::Impl::grab(const SphereView& tool) {
     d.flags.download(inside.data(), inside.size(), d.compute);
     CTSURG_CUDA_CHECK(cudaStreamSynchronize(d.compute));
   }
-  d.drop_graph();  // a captured graph holds the previous grab's buffers and count
+  d.drop_graph();  // a captured graph holds the grab set it was recorded with
   Grab g;  // compaction in id order, as on the CPU: deterministic
   for (int32_t i = 0; i < particles; ++i)
     if (inside[static_cast<std::size_t>(i)]) g.particles.push_back(i);
   g.offsets.resize(3 * g.particles.size());
-  d.grab_count = static_cast<int64_t>(g.particles.size());
-  d.grab_ids.upload(g.particles, d.compute);
-  d.grab_offsets.resize(g.offsets.size());
-  if (d.grab_count > 0) {
-    grab_offsets_kernel<<<blocks_for(d.grab_count), kBlock, 0, d.compute>>>(d.x(0), d.x(1), d.x(2), d.grab_ids.data(),
-                                                                            d.grab_count, tool, d.grab_offsets.data());
+  std::size_t k = 0;  // the lowest free slot
+  while (k < d.grabs.size() && d.grabs[k]->held) ++k;
+  if (k == d.grabs.size()) {
+    d.grabs.push_back(std::make_unique<Device::GrabSlot>());
+    d.grabs.back()->centre.resize(1);
+    grabs_held.push_back(0);
+  }
+  Device::GrabSlot& slot = *d.grabs[k];
+  slot.count = static_cast<int64_t>(g.particles.size());
+  slot.ids.upload(g.particles, d.compute);
+  slot.offsets.resize(g.offsets.size());
+  if (slot.count > 0) {
+    grab_offsets_kernel<<<blocks_for(slot.count), kBlock, 0, d.compute>>>(d.x(0), d.x(1), d.x(2), slot.ids.data(),
+                                                                          slot.count, tool, slot.offsets.data());
     CTSURG_CUDA_LAUNCHED(d.compute);
-    d.grab_offsets.download(g.offsets.data(), g.offsets.size(), d.compute);
+    slot.offsets.download(g.offsets.data(), g.offsets.size(), d.compute);
   }
   // Until apply_grab() moves it, the grab holds its particles where they are (centre at grab time).
-  set_centre_kernel<<<1, 1, 0, d.compute>>>(d.grab_centre.data(), tool);
+  set_centre_kernel<<<1, 1, 0, d.compute>>>(slot.centre.data(), tool);
   CTSURG_CUDA_LAUNCHED(d.compute);
   CTSURG_CUDA_CHECK(cudaStreamSynchronize(d.compute));
-  grab_held = true;
+  slot.held = true;
+  grabs_held[k] = 1;
+  if (handle != nullptr) *handle = static_cast<int>(k);
   return g;
 }
 
-void DeviceSimulation::Impl::apply_grab(const SphereView& centre) {
+void DeviceSimulation::Impl::apply_grab(int handle, const SphereView& centre) {
   Device& d = *device;
   CTSURG_CUDA_CHECK(cudaSetDevice(d.ordinal));
-  set_centre_kernel<<<1, 1, 0, d.compute>>>(d.grab_centre.data(), centre);  // queued: no wait
+  Device::GrabSlot& slot = *d.grabs[static_cast<std::size_t>(handle)];
+  set_centre_kernel<<<1, 1, 0, d.compute>>>(slot.centre.data(), centre);  // queued: no wait
   CTSURG_CUDA_LAUNCHED(d.compute);
-  if (d.grab_count > 0) {
-    place_grabbed_kernel<<<blocks_for(d.grab_count), kBlock, 0, d.compute>>>(d.x(0), d.x(1), d.x(2), d.grab_ids.data(),
-                                                                            d.grab_offsets.data(), d.grab_count,
-                                                                            d.grab_centre.data());
+  if (slot.count > 0) {
+    place_grabbed_kernel<<<blocks_for(slot.count), kBlock, 0, d.compute>>>(d.x(0), d.x(1), d.x(2), slot.ids.data(),
+                                                                          slot.offsets.data(), slot.count,
+                                                                          slot.centre.data());
     CTSURG_CUDA_LAUNCHED(d.compute);
   }
 }
 
-void DeviceSimulation::Impl::release_grab() {
-  grab_held = false;
-  if (device != nullptr) device->grab_count = 0;  // the next step() captures a graph without the grab
+void DeviceSimulation::Impl::release_grab(int handle) {
+  for (std::size_t k = 0; k < grabs_held.size(); ++k) {
+    if (handle >= 0 && static_cast<std::size_t>(handle) != k) continue;
+    grabs_held[k] = 0;
+    if (device != nullptr && k < device->grabs.size()) device->grabs[k]->held = false;
+  }
+  if (device != nullptr) device->drop_graph();  // the next step() captures a graph without it
 }
 
 int64_t DeviceSimulation::Impl::cut(const TriangleView& blade) {

@@ -32,9 +32,9 @@ struct DeviceSimulation::Impl {
   void step(int64_t steps, const VerletConstants& constants);
   void normals(const VerletConstants& constants, ParticleNormals& normals);
   int64_t probe(const SphereView& tool);
-  Grab grab(const SphereView& tool);
-  void apply_grab(const SphereView& centre);  // radius unused
-  void release_grab();
+  Grab grab(const SphereView& tool, int* handle);  // *handle: the new grab's slot
+  void apply_grab(int handle, const SphereView& centre);  // radius unused
+  void release_grab(int handle);                   // -1: every grab
   int64_t cut(const TriangleView& blade);
   // particles, weights #V x 8; rest_vertices #V x 3; rest_positions #P x 3 (host arrays).
   void set_surface(const int32_t* particles, const Real* weights, const Real* rest_vertices, int64_t vertices,
@@ -51,7 +51,7 @@ struct DeviceSimulation::Impl {
   int32_t particles = 0;
   int32_t springs = 0;            // explicit model: #S
   bool spring_damping = false;    // the model has damping along some spring (the damped kernel runs)
-  bool grab_held = false;
+  std::vector<uint8_t> grabs_held;  // per grab slot (handle): held
   int64_t surface_vertices = -1;  // -1 = no surface set
   int64_t frames_queued = 0;      // move_surface_async calls since set_surface
 

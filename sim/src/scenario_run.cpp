@@ -36,6 +36,7 @@ struct ToolState {
   const ToolAction* spec = nullptr;
   ResolvedPath path;
   std::optional<Grab> grab;  // captured particles while grabbing
+  int grab_handle = -1;      // the engine's name for it (DeviceSimulation holds several)
   std::vector<int32_t> loaded;  // force: the particles sharing the force (captured at start)
   bool released = false;
   std::optional<double> cut_from;  // cut: the time the blade's current sweep started
@@ -276,19 +277,15 @@ Trajectory run_scenario(const Scenario& s, RunReport* report_out, const std::fun
   params.gravity = s.gravity;
   params.threads = s.threads;
 
-  // Where the state is stepped. On a CUDA device (docs/gpu.md) the run holds one grab at a time and no
-  // force tool (DeviceSimulation holds one grab; a force changes the state on the host every step),
-  // and restarts after instability are not offered.
+  // Where the state is stepped. On a CUDA device (docs/gpu.md) the run takes no force tool (a force
+  // changes the state on the host every step), and restarts after instability are not offered.
   std::unique_ptr<SpringEngine> engine;
   if (backend == Backend::cuda) {
-    int grabs = 0;
     for (const auto& t : s.tools) {
-      grabs += t.kind == ToolAction::Kind::grab;
       if (t.kind == ToolAction::Kind::force) {
         throw InputError(sfile, t.label, "force tools run on the cpu backend only; set backend: cpu");
       }
     }
-    if (grabs > 1) throw InputError(sfile, "backend", "the cuda backend holds one grab at a time; set backend: cpu");
     engine = std::make_unique<DeviceSpringEngine>(model, state);
     report.notes.push_back("backend cuda: " + cuda_device_info(0).name);
   } else {
@@ -335,7 +332,7 @@ Trajectory run_scenario(const Scenario& s, RunReport* report_out, const std::fun
       const Vec3 c = ts.path.at(t_next);
       if (spec.kind == ToolAction::Kind::grab) {
         if (!ts.grab && !ts.released && ts.active(t_next)) {
-          ts.grab = engine->capture({c, spec.radius_mm}, true);
+          ts.grab = engine->capture({c, spec.radius_mm}, true, &ts.grab_handle);
           if (ts.grab->particles.empty()) {
             throw InputError(sfile, spec.label, "grabs no particle at t = " + std::to_string(t_next) + " s (sphere of radius " +
                                                     std::to_string(spec.radius_mm) + " mm at (" + std::to_string(c[0] + origin[0]) + ", " +
@@ -347,12 +344,12 @@ Trajectory run_scenario(const Scenario& s, RunReport* report_out, const std::fun
         }
         if (ts.grab && !ts.active(t_next)) {
           ts.grab.reset();
-          engine->release_grab();
+          engine->release_grab(ts.grab_handle);
           ts.released = true;
           tool_work = true;  // the release turns the stretch into motion
         }
         if (ts.grab) {
-          engine->apply_grab(*ts.grab, c);
+          engine->apply_grab(*ts.grab, ts.grab_handle, c);
           tool_work = true;
         }
       } else if (spec.kind == ToolAction::Kind::force) {
@@ -360,7 +357,7 @@ Trajectory run_scenario(const Scenario& s, RunReport* report_out, const std::fun
         // update: applied after the step, as the papers apply the tools, it is the same update as a
         // force inside the step (x_next = ... + (f + F / n) / m dt^2).
         if (ts.loaded.empty() && !ts.released && ts.active(t_next)) {
-          const Grab inside = engine->capture({c, spec.radius_mm}, false);
+          const Grab inside = engine->capture({c, spec.radius_mm}, false, nullptr);
           for (const int32_t i : inside.particles) {
             if (state.inv_mass[static_cast<size_t>(i)] > 0) ts.loaded.push_back(i);
           }

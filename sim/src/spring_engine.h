@@ -25,10 +25,11 @@ class SpringEngine {
  public:
   virtual ~SpringEngine() = default;
   virtual void step(const StepParameters& parameters) = 0;
-  // Captures the particles inside the sphere (a grab, or the particles a force acts on).
-  virtual Grab capture(const Sphere& tool, bool hold) = 0;
-  virtual void apply_grab(const Grab& grab, const std::array<double, 3>& centre) = 0;
-  virtual void release_grab() = 0;
+  // Captures the particles inside the sphere (a grab when `hold`, or the particles a force acts on);
+  // a held grab's handle goes to *handle for apply_grab and release_grab.
+  virtual Grab capture(const Sphere& tool, bool hold, int* handle) = 0;
+  virtual void apply_grab(const Grab& grab, int handle, const std::array<double, 3>& centre) = 0;
+  virtual void release_grab(int handle) = 0;
   virtual int64_t probe(const Sphere& tool) = 0;
   virtual int64_t cut(const Triangle& blade) = 0;
   // Makes the host's state (and the model's spring presence) current / uploads the host's state.
@@ -43,11 +44,11 @@ class HostSpringEngine final : public SpringEngine {
   void step(const StepParameters& p) override {
     std::visit([&](const auto& m) { sim::step(m, state_, p, Backend::cpu); }, model_);
   }
-  Grab capture(const Sphere& tool, bool) override { return grab_particles_in_sphere(state_, tool, Backend::cpu, threads_); }
-  void apply_grab(const Grab& grab, const std::array<double, 3>& centre) override {
+  Grab capture(const Sphere& tool, bool, int*) override { return grab_particles_in_sphere(state_, tool, Backend::cpu, threads_); }
+  void apply_grab(const Grab& grab, int, const std::array<double, 3>& centre) override {
     sim::apply_grab(state_, grab, centre, Backend::cpu, threads_);
   }
-  void release_grab() override {}
+  void release_grab(int) override {}
   int64_t probe(const Sphere& tool) override { return probe_sphere(state_, tool, Backend::cpu, threads_); }
   int64_t cut(const Triangle& blade) override {
     return std::visit([&](auto& m) { return cut_springs_crossing_triangle(m, state_, blade, Backend::cpu, threads_); }, model_);
@@ -62,21 +63,23 @@ class HostSpringEngine final : public SpringEngine {
   int threads_;
 };
 
-// One grab at a time (DeviceSimulation holds one); the run refuses scenarios with more before it
-// starts. Unverified on a GPU in this repository's CI (docs/gpu.md).
+// Grabs are held on the device (DeviceSimulation's handles) and placed after every step there.
+// Unverified on a GPU in this repository's CI (docs/gpu.md).
 class DeviceSpringEngine final : public SpringEngine {
  public:
   DeviceSpringEngine(SpringModel& model, ParticleState& state) : model_(model), state_(state) {
     std::visit([&](const auto& m) { gpu_.upload(m, state_); }, model_);
   }
   void step(const StepParameters& p) override { gpu_.step(1, p); }
-  Grab capture(const Sphere& tool, bool hold) override {
-    Grab g = gpu_.grab(tool);
-    if (!hold) gpu_.release_grab();
+  Grab capture(const Sphere& tool, bool hold, int* handle) override {
+    int h = -1;
+    Grab g = gpu_.grab(tool, &h);
+    if (hold && handle != nullptr) *handle = h;
+    if (!hold) gpu_.release_grab(h);
     return g;
   }
-  void apply_grab(const Grab&, const std::array<double, 3>& centre) override { gpu_.apply_grab(centre); }
-  void release_grab() override { gpu_.release_grab(); }
+  void apply_grab(const Grab&, int handle, const std::array<double, 3>& centre) override { gpu_.apply_grab(centre, handle); }
+  void release_grab(int handle) override { gpu_.release_grab(handle); }
   int64_t probe(const Sphere& tool) override { return gpu_.probe(tool); }
   int64_t cut(const Triangle& blade) override { return gpu_.cut_springs_crossing_triangle(blade); }
   void to_host() override {

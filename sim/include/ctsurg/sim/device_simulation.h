@@ -89,15 +89,19 @@ class DeviceSimulation {
   // Tools (sphere_tools.h, spring_cutting.h), on the device's current positions.
   // Projects the free particles inside the sphere onto its surface; returns how many moved.
   int64_t probe(const Sphere& tool);
-  // Captures the particles strictly inside the sphere (increasing ids) with their offsets, keeps the
-  // grab on the device and returns a copy. The inside flags (1 byte per particle) come back to the
-  // host for an ordered compaction: grabbing is an event, not a per-step operation.
-  Grab grab(const Sphere& tool);
-  // Places the held grab at `centre` now, and after every later step, until release_grab().
-  // InputError("device grab", ...) when no grab is held.
-  void apply_grab(const std::array<double, 3>& centre);
-  void release_grab();
-  bool grab_held() const;
+  // Captures the particles strictly inside the sphere (increasing ids) with their offsets, holds the
+  // grab on the device next to any grabs already held, and returns a copy; *handle (when given) names
+  // it: the lowest handle not held, so the first grab is 0. The inside flags (1 byte per particle)
+  // come back to the host for an ordered compaction: grabbing is an event, not a per-step operation.
+  // After each step the held grabs are placed in handle order (a particle in two grabs follows the
+  // later one, as the CPU's apply_grab calls in that order).
+  Grab grab(const Sphere& tool, int* handle = nullptr);
+  // Places held grab `handle` at `centre` now, and after every later step, until it is released.
+  // InputError("device grab", "grab", ...) when that grab is not held.
+  void apply_grab(const std::array<double, 3>& centre, int handle = 0);
+  // Releases grab `handle`, or every grab (-1).
+  void release_grab(int handle = -1);
+  bool grab_held() const;  // any grab
   // Cuts the springs crossing the triangle (on the device's model); returns the number cut.
   int64_t cut_springs_crossing_triangle(const Triangle& blade);
 
