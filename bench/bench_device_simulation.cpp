@@ -25,6 +25,8 @@
 #include "ctsurg/sim/spring_mass_step.h"
 #include "ctsurg/sim/stability.h"
 
+#include "device_bench_main.h"
+
 #include <benchmark/benchmark.h>
 
 #include <array>
@@ -128,19 +130,4 @@ BENCHMARK(BM_DeviceExplicitStep)
 
 }  // namespace
 
-int main(int argc, char** argv) {
-  if (!backend_available(Backend::cuda)) {
-    std::printf("bench_device_simulation: skipped: %s\n",
-                cuda_built() ? "no CUDA device on this machine" : "this build has no CUDA (CTSURG_CUDA=OFF or no nvcc)");
-    return 0;
-  }
-  const DeviceInfo info = cuda_device_info(0);
-  std::printf("device: %s (sm_%d%d, %d SMs, %.1f GiB, peak %.0f GB/s)\n", info.name.c_str(), info.compute_major,
-              info.compute_minor, info.multiprocessors, static_cast<double>(info.total_bytes) / (1 << 30),
-              info.peak_bandwidth_gbs);
-  benchmark::Initialize(&argc, argv);
-  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 2;
-  benchmark::RunSpecifiedBenchmarks();
-  benchmark::Shutdown();
-  return 0;
-}
+int main(int argc, char** argv) { return ctsurg::sim::bench::run_device_benchmarks("bench_device_simulation", argc, argv); }

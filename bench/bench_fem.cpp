@@ -18,6 +18,8 @@
 #include "ctsurg/sim/fem_linear_static_solver.h"
 #include "ctsurg/sim/fem_static_solver.h"
 
+#include "fem_bench_models.h"
+
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
@@ -29,38 +31,9 @@ namespace {
 
 using namespace ctsurg::sim;
 
-FemMaterial material(FemMaterialModel model) {
-  FemMaterial m;
-  m.model = model;
-  m.youngs_modulus = 3e4;
-  m.poisson_ratio = 0.45;
-  return m;
-}
-
-const FemModel& cube(int n, FemMaterialModel model) {
-  static std::map<std::pair<int, int>, std::unique_ptr<FemModel>> models;
-  auto& slot = models[{n, static_cast<int>(model)}];
-  if (!slot) {
-    const auto box = fem_box_mesh({n, n, n}, {20, 20, 20});
-    slot = std::make_unique<FemModel>(build_fem_model(box.nodes, box.tets, material(model)));
-  }
-  return *slot;
-}
-
-// The benchmark's boundary conditions: bottom face fixed, the top face's centre (radius 3.5 mm)
-// grabbed `depth` mm down.
-FemBoundaryConditions cube_grab(const FemModel& m, double depth) {
-  FemBoundaryConditions bc;
-  for (int32_t i = 0; i < m.node_count(); ++i) {
-    const double* p = &m.nodes[3 * i];
-    if (p[2] == 0) bc.fixed_nodes.push_back(i);
-    if (std::abs(p[2] - 20) < 1e-9 && std::hypot(p[0] - 10, p[1] - 10) <= 3.5) {
-      bc.prescribed_nodes.push_back(i);
-      bc.prescribed_displacements.insert(bc.prescribed_displacements.end(), {0.0, 0.0, -depth});
-    }
-  }
-  return bc;
-}
+using bench::cube;
+using bench::cube_grab;
+using bench::material;
 
 void static_solve(benchmark::State& state, FemMaterialModel model) {
   const int n = static_cast<int>(state.range(0));

@@ -24,6 +24,9 @@
 #include "ctsurg/sim/fem_explicit_dynamics.h"
 #include "ctsurg/sim/fem_static_solver.h"
 
+#include "device_bench_main.h"
+#include "fem_bench_models.h"
+
 #include <benchmark/benchmark.h>
 
 #include <cmath>
@@ -38,13 +41,7 @@ using namespace ctsurg::sim;
 constexpr double kBytesPerElement = 177;
 constexpr int kBatch = 480;  // steps per timed call
 
-FemMaterial material(FemMaterialModel model) {
-  FemMaterial m;
-  m.model = model;
-  m.youngs_modulus = 3e4;
-  m.poisson_ratio = 0.45;
-  return m;
-}
+using bench::material;
 
 double peak_gbs() {
   static const double peak = cuda_device_info(0).peak_bandwidth_gbs;
@@ -89,28 +86,10 @@ BENCHMARK(BM_DeviceFemExplicitStep)
     ->Arg(10000)->Arg(100000)->Arg(500000)->Arg(2000000)
     ->Unit(benchmark::kMillisecond)->UseRealTime();
 
-const FemModel& cube(int n) {
-  static std::map<int, std::unique_ptr<FemModel>> models;
-  auto& slot = models[n];
-  if (!slot) {
-    const auto box = fem_box_mesh({n, n, n}, {20, 20, 20});
-    slot = std::make_unique<FemModel>(build_fem_model(box.nodes, box.tets, material(FemMaterialModel::linear)));
-  }
-  return *slot;
-}
-
 void BM_FemStaticLinearCg(benchmark::State& state) {
-  const FemModel& m = cube(static_cast<int>(state.range(0)));
+  const FemModel& m = bench::cube(static_cast<int>(state.range(0)), FemMaterialModel::linear);
   const Backend backend = state.range(1) ? Backend::cuda : Backend::cpu;
-  FemBoundaryConditions bc;
-  for (int32_t i = 0; i < m.node_count(); ++i) {
-    const double* p = &m.nodes[3 * i];
-    if (p[2] == 0) bc.fixed_nodes.push_back(i);
-    if (std::abs(p[2] - 20) < 1e-9 && std::hypot(p[0] - 10, p[1] - 10) <= 3.5) {
-      bc.prescribed_nodes.push_back(i);
-      bc.prescribed_displacements.insert(bc.prescribed_displacements.end(), {0.0, 0.0, -2.0});
-    }
-  }
+  const FemBoundaryConditions bc = bench::cube_grab(m, 2.0);
   FemStaticReport rep;
   for (auto _ : state) {
     rep = solve_fem_static(m, bc, {}, {}, backend).report;
@@ -130,19 +109,4 @@ BENCHMARK(BM_FemStaticLinearCg)->ArgsProduct({{9, 12, 14, 16}, {0, 1}})->Unit(be
 
 }  // namespace
 
-int main(int argc, char** argv) {
-  if (!backend_available(Backend::cuda)) {
-    std::printf("bench_fem_device: skipped: %s\n",
-                cuda_built() ? "no CUDA device on this machine" : "this build has no CUDA (CTSURG_CUDA=OFF or no nvcc)");
-    return 0;
-  }
-  const DeviceInfo info = cuda_device_info(0);
-  std::printf("device: %s (sm_%d%d, %d SMs, %.1f GiB, peak %.0f GB/s)\n", info.name.c_str(), info.compute_major,
-              info.compute_minor, info.multiprocessors, static_cast<double>(info.total_bytes) / (1 << 30),
-              info.peak_bandwidth_gbs);
-  benchmark::Initialize(&argc, argv);
-  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 2;
-  benchmark::RunSpecifiedBenchmarks();
-  benchmark::Shutdown();
-  return 0;
-}
+int main(int argc, char** argv) { return ctsurg::sim::bench::run_device_benchmarks("bench_fem_device", argc, argv); }
