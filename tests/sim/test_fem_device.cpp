@@ -26,6 +26,7 @@
 #include "ctsurg/sim/fem_box_mesh.h"
 #include "ctsurg/sim/fem_forces.h"
 #include "ctsurg/sim/fem_static_solver.h"
+#include "fem_test_models.h"
 
 #include <gtest/gtest.h>
 
@@ -52,20 +53,10 @@ class FemDeviceTest : public ::testing::Test {
 };
 
 FemModel box_model(FemMaterialModel material, std::array<int, 3> cells, std::array<double, 3> size) {
-  const auto box = fem_box_mesh(cells, size);
-  FemMaterial m;
-  m.model = material;
-  m.youngs_modulus = 3e4;
-  m.poisson_ratio = 0.45;
-  return build_fem_model(box.nodes, box.tets, m);
+  return test::fem_box_model(material, cells, size);
 }
 
-std::vector<int32_t> nodes_where(const FemModel& m, int axis, double value) {
-  std::vector<int32_t> out;
-  for (int32_t i = 0; i < m.node_count(); ++i)
-    if (std::abs(m.nodes[3 * i + axis] - value) < 1e-9) out.push_back(i);
-  return out;
-}
+using test::nodes_where;
 
 double max_abs(const std::vector<double>& a) {
   double m = 0;

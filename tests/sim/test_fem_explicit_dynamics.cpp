@@ -6,6 +6,7 @@
 #include "ctsurg/sim/fem_box_mesh.h"
 #include "ctsurg/sim/fem_forces.h"
 #include "ctsurg/sim/fem_static_solver.h"
+#include "fem_test_models.h"
 
 #include <gtest/gtest.h>
 
@@ -17,20 +18,10 @@ namespace ctsurg::sim {
 namespace {
 
 FemModel beam(std::array<int, 3> cells = {6, 2, 2}, std::array<double, 3> size = {12, 4, 4}) {
-  const auto box = fem_box_mesh(cells, size);
-  FemMaterial m;
-  m.model = FemMaterialModel::neo_hookean;
-  m.youngs_modulus = 3e4;
-  m.poisson_ratio = 0.3;
-  return build_fem_model(box.nodes, box.tets, m);
+  return test::fem_box_model(FemMaterialModel::neo_hookean, cells, size, 3e4, 0.3);
 }
 
-std::vector<int32_t> nodes_where(const FemModel& m, int axis, double value) {
-  std::vector<int32_t> out;
-  for (int32_t i = 0; i < m.node_count(); ++i)
-    if (std::abs(m.nodes[3 * i + axis] - value) < 1e-9) out.push_back(i);
-  return out;
-}
+using test::nodes_where;
 
 TEST(FemExplicitDynamics, CriticalStepFromTheSmallestElement) {
   const FemModel m = beam();
@@ -172,12 +163,7 @@ namespace {
 // steps 16 and 32 (v grows linearly), above an allowed growth of 1.5, so the run stops after step 32
 // with the message, the state finite.
 TEST(FemExplicitDynamics, EnergyGrowthAboveTheLimitStopsTheRun) {
-  const auto box = fem_box_mesh({2, 2, 2}, {4, 4, 4});
-  FemMaterial mat;
-  mat.model = FemMaterialModel::linear;
-  mat.youngs_modulus = 3e4;
-  mat.poisson_ratio = 0.3;
-  const FemModel m = build_fem_model(box.nodes, box.tets, mat);
+  const FemModel m = test::fem_box_model(FemMaterialModel::linear, {2, 2, 2}, {4, 4, 4}, 3e4, 0.3);
   FemDynamicsOptions o;
   o.gravity = {0, 0, -9810};
   o.energy_growth = 1.5;

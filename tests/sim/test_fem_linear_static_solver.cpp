@@ -6,6 +6,7 @@
 
 #include "ctsurg/core/error.h"
 #include "ctsurg/sim/fem_box_mesh.h"
+#include "fem_test_models.h"
 
 #include <gtest/gtest.h>
 
@@ -17,21 +18,9 @@
 namespace ctsurg::sim {
 namespace {
 
-FemModel box_model(FemMaterialModel law = FemMaterialModel::linear) {
-  FemMaterial mat;
-  mat.model = law;
-  mat.youngs_modulus = 3e4;
-  mat.poisson_ratio = 0.45;
-  const auto box = fem_box_mesh({5, 5, 6}, {10, 10, 12});
-  return build_fem_model(box.nodes, box.tets, mat);
-}
+FemModel box_model(FemMaterialModel law = FemMaterialModel::linear) { return test::fem_box_model(law, {5, 5, 6}, {10, 10, 12}); }
 
-std::vector<int32_t> nodes_where(const FemModel& m, int axis, double value) {
-  std::vector<int32_t> out;
-  for (int32_t i = 0; i < m.node_count(); ++i)
-    if (std::abs(m.nodes[3 * i + axis] - value) < 1e-9) out.push_back(i);
-  return out;
-}
+using test::nodes_where;
 
 // The centre of the top face (z = 12) within radius 2.5 mm.
 std::vector<int32_t> top_centre(const FemModel& m) {

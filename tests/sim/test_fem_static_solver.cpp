@@ -5,6 +5,7 @@
 #include "ctsurg/core/error.h"
 #include "ctsurg/sim/fem_box_mesh.h"
 #include "ctsurg/sim/fem_forces.h"
+#include "fem_test_models.h"
 
 #include <gtest/gtest.h>
 
@@ -51,12 +52,7 @@ std::vector<double> face_traction(const FemModel& m, int axis, double value, con
   return f;
 }
 
-std::vector<int32_t> nodes_where(const FemModel& m, int axis, double value) {
-  std::vector<int32_t> out;
-  for (int32_t i = 0; i < m.node_count(); ++i)
-    if (std::abs(m.nodes[3 * i + axis] - value) < 1e-9) out.push_back(i);
-  return out;
-}
+using test::nodes_where;
 
 TEST(FemStaticSolver, PatchTestUniformDeformationIsReproducedExactly) {
   // Irregular interior nodes; the boundary moves with a uniform F = I + G. With no body force a uniform
