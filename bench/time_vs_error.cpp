@@ -121,14 +121,7 @@ void write_cantilever(const Level& l) {
       write_surface_mesh_file(l.dir / "surface_fem.h5", s, bench_provenance());
     }
   }
-  const FemBoxMesh box = fem_box_mesh({nx, n, n}, {40, 8, 8});
-  TetMesh m;
-  m.nodes = box.nodes;
-  m.tets = box.tets;
-  m.tet_labels.assign(box.tets.size() / 4, 1);
-  m.quality.radius_edge_bin_edges = {0, 1};
-  m.quality.radius_edge_histogram = {static_cast<int64_t>(m.tet_labels.size())};
-  write_tet_mesh_file(l.dir / "tetmesh.h5", m, bench_provenance());
+  write_tet_mesh_file(l.dir / "tetmesh.h5", tet_mesh_of(fem_box_mesh({nx, n, n}, {40, 8, 8})), bench_provenance());
 }
 
 std::string scenario_text(const Spec& sp, const Config& c) {

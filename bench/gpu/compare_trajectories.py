@@ -24,8 +24,9 @@ def load(path):
         t = f["trajectory"]
         surface = t["surface"]
         topologies = [np.asarray(surface["topologies"][k]) for k in sorted(surface["topologies"], key=int)]
+        model = t.attrs.get("model", "")
         return {
-            "model": t.attrs.get("model", b"").decode() if isinstance(t.attrs.get("model", b""), bytes) else str(t.attrs.get("model", "")),
+            "model": model.decode() if isinstance(model, bytes) else str(model),
             "vertices": np.asarray(surface["vertices"], dtype=np.float64),
             "topology_of_frame": np.asarray(surface["topology_of_frame"]),
             "topologies": topologies,

@@ -48,4 +48,14 @@ FemBoxMesh fem_box_mesh(const std::array<int, 3>& cells, const std::array<double
   return m;
 }
 
+TetMesh tet_mesh_of(const FemBoxMesh& box) {
+  TetMesh m;
+  m.nodes = box.nodes;
+  m.tets = box.tets;
+  m.tet_labels.assign(box.tets.size() / 4, 1);
+  m.quality.radius_edge_bin_edges = {0, 1};
+  m.quality.radius_edge_histogram = {static_cast<int64_t>(m.tet_labels.size())};
+  return m;
+}
+
 }  // namespace ctsurg::sim

@@ -39,14 +39,8 @@ inline void write_block_files(const std::filesystem::path& dir, int nx, int ny, 
 // The 16 x 4 x 4 bar of 2 mm cells (solid x 11..43, y -19..-11, z 31..39 mm) as a structured tet mesh
 // (8 x 2 x 2 cells of 4 mm, Kuhn tets), `dir`/tetmesh.h5.
 inline void write_bar_tet_mesh(const std::filesystem::path& dir) {
-  const FemBoxMesh box = fem_box_mesh({8, 2, 2}, {32, 8, 8}, {11, -19, 31});
-  TetMesh m;
-  m.nodes = box.nodes;
-  m.tets = box.tets;
-  m.tet_labels.assign(box.tets.size() / 4, 1);
-  m.quality.radius_edge_bin_edges = {0, 1};
-  m.quality.radius_edge_histogram = {static_cast<int64_t>(m.tet_labels.size())};
-  write_tet_mesh_file(dir / "tetmesh.h5", m, ctsurg::test::test_provenance());
+  write_tet_mesh_file(dir / "tetmesh.h5", tet_mesh_of(fem_box_mesh({8, 2, 2}, {32, 8, 8}, {11, -19, 31})),
+                      ctsurg::test::test_provenance());
 }
 
 }  // namespace ctsurg::sim::test

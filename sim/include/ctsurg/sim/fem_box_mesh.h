@@ -3,6 +3,8 @@
 // in every cell, so faces match across cells and the mesh is conforming).
 #pragma once
 
+#include "ctsurg/core/tet_mesh_file.h"
+
 #include <array>
 #include <cstdint>
 #include <vector>
@@ -19,5 +21,9 @@ struct FemBoxMesh {
 // Throws InputError("fem box mesh", "cells" | "size", ...) otherwise.
 FemBoxMesh fem_box_mesh(const std::array<int, 3>& cells, const std::array<double, 3>& size,
                         const std::array<double, 3>& origin = {0, 0, 0});
+
+// The box as a ctsurg tet mesh (one label, 1; a one-bin quality histogram), for writing a tetmesh.h5
+// that scenarios read.
+TetMesh tet_mesh_of(const FemBoxMesh& box);
 
 }  // namespace ctsurg::sim
