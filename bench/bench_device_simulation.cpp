@@ -18,12 +18,12 @@
 // for docs/benchmarks.md.
 //
 // Without a CUDA device (or in a build without CUDA) the program says so and exits 0.
-#include "ctsurg/sim/backend.h"
-#include "ctsurg/sim/device_simulation.h"
-#include "ctsurg/sim/explicit_spring_model.h"
-#include "ctsurg/sim/spring_grid_model.h"
-#include "ctsurg/sim/spring_mass_step.h"
-#include "ctsurg/sim/stability.h"
+#include "ctsurg/sim/base/backend.h"
+#include "ctsurg/sim/springs/device_simulation.h"
+#include "ctsurg/sim/springs/explicit_spring_model.h"
+#include "ctsurg/sim/springs/spring_grid_model.h"
+#include "ctsurg/sim/springs/spring_mass_step.h"
+#include "ctsurg/sim/springs/stability.h"
 
 #include "device_bench_main.h"
 

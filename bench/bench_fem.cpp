@@ -13,10 +13,10 @@
 //    against Euler-Bernoulli (linear tets lock in bending: the error falls as n^-2).
 // 2. Explicit dynamics: element updates per second (tets x steps / s) of the full step (element pass,
 //    node gather, central-difference update) at 10k .. 500k tets, 1 and 2 threads.
-#include "ctsurg/sim/fem_box_mesh.h"
-#include "ctsurg/sim/fem_explicit_dynamics.h"
-#include "ctsurg/sim/fem_linear_static_solver.h"
-#include "ctsurg/sim/fem_static_solver.h"
+#include "ctsurg/sim/fem/fem_box_mesh.h"
+#include "ctsurg/sim/fem/fem_explicit_dynamics.h"
+#include "ctsurg/sim/fem/fem_linear_static_solver.h"
+#include "ctsurg/sim/fem/fem_static_solver.h"
 
 #include "fem_bench_models.h"
 

@@ -18,11 +18,11 @@
 //    including the upload of the matrix values), assembly ms (host).
 //
 // Without a CUDA device (or in a build without CUDA) the program says so and exits 0.
-#include "ctsurg/sim/backend.h"
-#include "ctsurg/sim/device_simulation.h"
-#include "ctsurg/sim/fem_box_mesh.h"
-#include "ctsurg/sim/fem_explicit_dynamics.h"
-#include "ctsurg/sim/fem_static_solver.h"
+#include "ctsurg/sim/base/backend.h"
+#include "ctsurg/sim/fem/fem_box_mesh.h"
+#include "ctsurg/sim/fem/fem_explicit_dynamics.h"
+#include "ctsurg/sim/fem/fem_static_solver.h"
+#include "ctsurg/sim/springs/device_simulation.h"
 
 #include "device_bench_main.h"
 #include "fem_bench_models.h"

@@ -7,10 +7,10 @@
 // spring damping (as the papers' table). bench/run.sh writes the table in docs/benchmarks.md.
 #include "ctsurg/preprocess/image_file_reader.h"
 #include "ctsurg/preprocess/occupancy_downsampling.h"
-#include "ctsurg/sim/explicit_spring_model.h"
-#include "ctsurg/sim/spring_grid_model.h"
-#include "ctsurg/sim/spring_mass_step.h"
-#include "ctsurg/sim/stability.h"
+#include "ctsurg/sim/springs/explicit_spring_model.h"
+#include "ctsurg/sim/springs/spring_grid_model.h"
+#include "ctsurg/sim/springs/spring_mass_step.h"
+#include "ctsurg/sim/springs/stability.h"
 
 #include <benchmark/benchmark.h>
 

@@ -3,8 +3,8 @@
 // otherwise it prints the device and runs Google Benchmark.
 #pragma once
 
-#include "ctsurg/sim/backend.h"
-#include "ctsurg/sim/device_simulation.h"
+#include "ctsurg/sim/base/backend.h"
+#include "ctsurg/sim/springs/device_simulation.h"
 
 #include <benchmark/benchmark.h>
 

@@ -4,9 +4,9 @@
 // the centre of the top face (radius 3.5 mm) grabbed `depth` mm down. Units: mm, Pa.
 #pragma once
 
-#include "ctsurg/sim/fem_box_mesh.h"
-#include "ctsurg/sim/fem_model.h"
-#include "ctsurg/sim/fem_static_solver.h"
+#include "ctsurg/sim/fem/fem_box_mesh.h"
+#include "ctsurg/sim/fem/fem_model.h"
+#include "ctsurg/sim/fem/fem_static_solver.h"
 
 #include <cmath>
 #include <map>

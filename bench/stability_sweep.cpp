@@ -14,15 +14,15 @@
 #include <cstdlib>
 #include "ctsurg/core/tet_mesh_file.h"
 #include "ctsurg/core/volume.h"
-#include "ctsurg/sim/explicit_spring_model.h"
-#include "ctsurg/sim/fem_box_mesh.h"
-#include "ctsurg/sim/fem_explicit_dynamics.h"
-#include "ctsurg/sim/fem_model.h"
-#include "ctsurg/sim/material_presets.h"
-#include "ctsurg/sim/spring_calibration.h"
-#include "ctsurg/sim/spring_grid_model.h"
-#include "ctsurg/sim/spring_mass_step.h"
-#include "ctsurg/sim/stability.h"
+#include "ctsurg/sim/base/material_presets.h"
+#include "ctsurg/sim/fem/fem_box_mesh.h"
+#include "ctsurg/sim/fem/fem_explicit_dynamics.h"
+#include "ctsurg/sim/fem/fem_model.h"
+#include "ctsurg/sim/springs/explicit_spring_model.h"
+#include "ctsurg/sim/springs/spring_calibration.h"
+#include "ctsurg/sim/springs/spring_grid_model.h"
+#include "ctsurg/sim/springs/spring_mass_step.h"
+#include "ctsurg/sim/springs/stability.h"
 
 #include <cmath>
 #include <cstdio>

@@ -33,9 +33,9 @@
 #include "ctsurg/core/volume.h"
 #include "ctsurg/mesh/lattice_padding.h"
 #include "ctsurg/mesh/marching_cubes.h"
-#include "ctsurg/sim/fem_box_mesh.h"
-#include "ctsurg/sim/scenario.h"
-#include "ctsurg/sim/scenario_run.h"
+#include "ctsurg/sim/fem/fem_box_mesh.h"
+#include "ctsurg/sim/scenario/scenario.h"
+#include "ctsurg/sim/scenario/scenario_run.h"
 
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>

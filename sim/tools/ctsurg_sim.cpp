@@ -8,8 +8,8 @@
 #include "ctsurg/core/tool_app.h"
 #include "ctsurg/core/trajectory_file.h"
 #include "ctsurg/core/version.h"
-#include "ctsurg/sim/scenario.h"
-#include "ctsurg/sim/scenario_run.h"
+#include "ctsurg/sim/scenario/scenario.h"
+#include "ctsurg/sim/scenario/scenario_run.h"
 
 #include <spdlog/spdlog.h>
 

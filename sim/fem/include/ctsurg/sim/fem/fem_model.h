@@ -1,0 +1,54 @@
+// The tetrahedral finite element model (linear 4-node tets, total Lagrangian): the rest mesh, one
+// material, and what every solver precomputes once per element and node (Huang et al., the FEM
+// paper, section 3: linear interpolation in each tet).
+//
+//   per element: rest volume V = det(Dm) / 6 and B = Dm^-1, Dm = [X1-X0, X2-X0, X3-X0] (columns), whose
+//                rows are the shape-function gradients of corners 1..3 (fem_element_impl.h)
+//   per node:    lumped mass m_i = sum over the tets at i of rho V / 4 (the paper's diagonal mass
+//                matrix, section 3.3), and the CSR list of (element, corner) at the node, sorted by
+//                element: every per-node sum is a gather over it, deterministic, no atomics
+//
+// Units: nodes LPS mm, volumes mm^3, B 1/mm, masses g.
+#pragma once
+
+#include "ctsurg/sim/fem/fem_material.h"
+
+#include <cstdint>
+#include <vector>
+
+namespace ctsurg {
+struct TetMesh;
+}
+
+namespace ctsurg::sim {
+
+struct FemModel {
+  FemMaterial material;
+  LameParameters lame;
+  std::vector<double> nodes;         // #N x 3 rest positions, LPS mm, row-major
+  std::vector<int32_t> tets;         // #T x 4 node ids, positively oriented
+  std::vector<double> rest_volume;   // #T mm^3 (> 0)
+  std::vector<double> dm_inverse;    // #T x 9, Dm^-1 row-major, 1/mm
+  std::vector<double> node_mass;     // #N g; 0 for a node that no tet uses
+  std::vector<int32_t> node_offsets; // #N + 1, CSR row starts into node_corners
+  std::vector<int32_t> node_corners; // #T x 4 entries 4 e + corner (corner 0..3), each row sorted
+  int32_t unused_nodes = 0;          // nodes no tet uses (held fixed by every solver)
+
+  int32_t node_count() const { return static_cast<int32_t>(nodes.size() / 3); }
+  int32_t tet_count() const { return static_cast<int32_t>(tets.size() / 4); }
+};
+
+// Builds the model from nodes (#N x 3, LPS mm) and tets (#T x 4, node ids). Throws
+// InputError("fem model", field, ...) for: a material out of range (validate_fem_material), sizes that
+// are not multiples of 3 and 4, no tets, a non-finite node ("nodes"), a node id out of range, an
+// inverted tet (signed volume <= 0: "tet 17 is inverted ...") or a degenerate one (|V| below 1e-9 of
+// its longest edge cubed: "tet 17 is degenerate ...") ("tets"), all before anything is solved.
+FemModel build_fem_model(const std::vector<double>& nodes, const std::vector<int32_t>& tets, const FemMaterial& material);
+// The same from a ctsurg tet mesh (mesh.nodes, mesh.tets; labels are not used: one material).
+FemModel build_fem_model(const TetMesh& mesh, const FemMaterial& material);
+
+// Total rest volume, mm^3, and total mass, g.
+double fem_total_volume(const FemModel& model);
+double fem_total_mass(const FemModel& model);
+
+}  // namespace ctsurg::sim

@@ -1,0 +1,51 @@
+// Per-index kernels of the FEM force passes (host and device): an element pass writes each element's
+// 12 corner forces to its own slots, a node pass gathers them through the node -> (element, corner)
+// CSR (STYLE.md rule 6: no atomics; the sum runs over the row in element order, so the bits do not
+// depend on the thread count). Displacements are #N x 3 row-major.
+#pragma once
+
+#include "ctsurg/sim/fem/kernels/fem_element_impl.h"
+
+namespace ctsurg::sim {
+
+template <class T>
+struct FemElementView {
+  const int32_t* tets;  // #T x 4
+  const T* dm_inverse;  // #T x 9
+  const T* volume;      // #T mm^3
+  int32_t count;        // #T
+  int32_t model;        // kFemLinear, kFemStvk, kFemNeoHookean
+  T mu, lambda;         // Pa
+};
+
+// Element e: its corner forces into corner_forces[12 e .. 12 e + 11]; false when inverted.
+template <class T>
+CTSURG_HD inline bool fem_element_force_pass(const FemElementView<T>& v, const T* u, int32_t e, T* corner_forces) {
+  T ue[12];
+  CTSURG_UNROLL
+  for (int a = 0; a < 4; ++a) {
+    const int32_t n = v.tets[4 * e + a];
+    ue[3 * a] = u[3 * n];
+    ue[3 * a + 1] = u[3 * n + 1];
+    ue[3 * a + 2] = u[3 * n + 2];
+  }
+  return fem_element_forces(v.model, v.mu, v.lambda, ue, v.dm_inverse + 9 * e, v.volume[e], corner_forces + 12 * e);
+}
+
+// Node i: the sum of its corners' forces, in CSR order.
+template <class T>
+CTSURG_HD inline void fem_gather_node_force(const int32_t* offsets, const int32_t* corners, const T* corner_forces,
+                                            int32_t i, T* f) {
+  T fx = T(0), fy = T(0), fz = T(0);
+  for (int32_t k = offsets[i]; k < offsets[i + 1]; ++k) {
+    const T* c = corner_forces + 3 * corners[k];  // 4 e + a -> 12 e + 3 a
+    fx += c[0];
+    fy += c[1];
+    fz += c[2];
+  }
+  f[0] = fx;
+  f[1] = fy;
+  f[2] = fz;
+}
+
+}  // namespace ctsurg::sim

@@ -1,0 +1,32 @@
+// The CPU launchers of the FEM kernels (OpenMP), called by the FEM dispatchers after their checks.
+#pragma once
+
+#include "ctsurg/sim/fem/kernels/fem_explicit_step_impl.h"
+#include "ctsurg/sim/fem/kernels/fem_forces_impl.h"
+
+#include <cstdint>
+
+namespace ctsurg::sim::cpu {
+
+// Element pass then node gather: forces #N x 3 from displacements u #N x 3. Returns the lowest inverted
+// element id or -1. corner_forces: #T x 12 scratch.
+int32_t fem_forces(const FemElementView<double>& elements, const int32_t* offsets, const int32_t* corners,
+                   int32_t nodes, const double* u, double* corner_forces, double* forces, int threads);
+int32_t fem_forces(const FemElementView<float>& elements, const int32_t* offsets, const int32_t* corners,
+                   int32_t nodes, const float* u, float* corner_forces, float* forces, int threads);
+
+// Element tangent stiffnesses K (#T x 144) at u. Returns the lowest inverted element id or -1.
+int32_t fem_stiffness(const FemElementView<double>& elements, const double* u, double* k, int threads);
+
+// One explicit step (fem_explicit_step_impl.h): element pass, node update. Returns the lowest inverted
+// element id or -1 (then nothing after the element pass is written) and sets *non_finite_node to the
+// lowest node whose new displacement is not finite, or -1.
+int32_t fem_explicit_step(const FemElementView<Real>& elements, const FemNodeView& nodes, const FemStepConstants& constants,
+                          Real* corner_forces, int threads, int32_t* non_finite_node);
+
+// Sphere contact: nodes (not fixed) inside the sphere moved to its surface along the radius; returns
+// how many moved.
+int64_t fem_sphere_contact(Real* u, const double* rest, const Real* inv_mass, int32_t nodes, const FemSphereView& sphere,
+                           int threads);
+
+}  // namespace ctsurg::sim::cpu

@@ -1,0 +1,85 @@
+#include "ctsurg/sim/fem/fem_forces.h"
+
+#include "fem_cpu_kernels.h"
+
+#include "ctsurg/core/error.h"
+
+#include <cmath>
+#include <string>
+
+namespace ctsurg::sim {
+namespace {
+
+void check_displacements(const FemModel& model, const std::vector<double>& u, const char* where) {
+  if (u.size() != 3 * static_cast<std::size_t>(model.node_count()))
+    throw InputError(where, "displacements", "expected #N x 3 = " + std::to_string(3 * model.node_count()) +
+                                                 " values, got " + std::to_string(u.size()));
+}
+
+void check_tet(const FemModel& model, int32_t e, const char* where) {
+  if (e < 0 || e >= model.tet_count()) throw InputError(where, "tet", "id " + std::to_string(e) + " out of range");
+}
+
+void element_displacements(const FemModel& model, int32_t e, const std::vector<double>& u, double* ue) {
+  for (int a = 0; a < 4; ++a)
+    for (int c = 0; c < 3; ++c) ue[3 * a + c] = u[3 * model.tets[4 * e + a] + c];
+}
+
+}  // namespace
+
+int32_t fem_internal_forces(const FemModel& model, const std::vector<double>& displacements, std::vector<double>& forces,
+                            Backend backend, int threads) {
+  require_backend(backend, "fem forces");
+  check_displacements(model, displacements, "fem forces");
+  const FemElementView<double> el{model.tets.data(), model.dm_inverse.data(), model.rest_volume.data(),
+                                  model.tet_count(), static_cast<int32_t>(model.material.model), model.lame.mu,
+                                  model.lame.lambda};
+  std::vector<double> corner(12 * static_cast<std::size_t>(model.tet_count()));
+  forces.resize(displacements.size());
+  return cpu::fem_forces(el, model.node_offsets.data(), model.node_corners.data(), model.node_count(),
+                         displacements.data(), corner.data(), forces.data(), threads);
+}
+
+double fem_strain_energy(const FemModel& model, const std::vector<double>& displacements) {
+  check_displacements(model, displacements, "fem strain energy");
+  double energy = 0;
+  const int32_t id = static_cast<int32_t>(model.material.model);
+  for (int32_t e = 0; e < model.tet_count(); ++e) {
+    double ue[12], F[9];
+    element_displacements(model, e, displacements, ue);
+    fem_deformation_gradient(ue, &model.dm_inverse[9 * e], F);
+    if (id == kFemNeoHookean && !(det3(F) > 0)) return HUGE_VAL;
+    energy += model.rest_volume[e] * fem_energy_density(id, model.lame.mu, model.lame.lambda, F);
+  }
+  return energy;
+}
+
+std::array<double, 9> fem_deformation_gradient(const FemModel& model, int32_t e, const std::vector<double>& displacements) {
+  check_displacements(model, displacements, "fem deformation gradient");
+  check_tet(model, e, "fem deformation gradient");
+  double ue[12];
+  element_displacements(model, e, displacements, ue);
+  std::array<double, 9> F{};
+  fem_deformation_gradient(ue, &model.dm_inverse[9 * e], F.data());
+  return F;
+}
+
+std::array<double, 9> fem_element_stress(const FemModel& model, int32_t e, const std::vector<double>& displacements) {
+  const auto F = fem_deformation_gradient(model, e, displacements);
+  std::array<double, 9> P{};
+  fem_first_piola(static_cast<int32_t>(model.material.model), model.lame.mu, model.lame.lambda, F.data(), P.data());
+  return P;
+}
+
+std::array<double, 144> fem_element_stiffness(const FemModel& model, int32_t e, const std::vector<double>& displacements) {
+  check_displacements(model, displacements, "fem element stiffness");
+  check_tet(model, e, "fem element stiffness");
+  double ue[12];
+  element_displacements(model, e, displacements, ue);
+  std::array<double, 144> K{};
+  fem_element_stiffness(static_cast<int32_t>(model.material.model), model.lame.mu, model.lame.lambda, ue,
+                        &model.dm_inverse[9 * e], model.rest_volume[e], K.data());
+  return K;
+}
+
+}  // namespace ctsurg::sim

@@ -1,0 +1,87 @@
+// The CPU build of the FEM kernels (fem_forces_impl.h, fem_explicit_step_impl.h): OpenMP over
+// elements, then over nodes, static partitions. Every result is written by exactly one index, so
+// the bits do not depend on the thread count. Inverted elements are reduced to the lowest id.
+#include "fem_cpu_kernels.h"
+
+#include "ctsurg/sim/base/parallel.h"
+
+#include <omp.h>
+
+#include <climits>
+
+namespace ctsurg::sim::cpu {
+namespace {
+
+template <class T>
+int32_t forces_impl(const FemElementView<T>& elements, const int32_t* offsets, const int32_t* corners, int32_t nodes,
+                    const T* u, T* corner_forces, T* forces, int threads) {
+  const int t = thread_count(threads, elements.count);
+  int32_t first = INT32_MAX;
+#pragma omp parallel num_threads(t)
+  {
+#pragma omp for schedule(static) reduction(min : first)
+    for (int32_t e = 0; e < elements.count; ++e)
+      if (!fem_element_force_pass(elements, u, e, corner_forces) && e < first) first = e;
+#pragma omp for schedule(static)
+    for (int32_t i = 0; i < nodes; ++i) fem_gather_node_force(offsets, corners, corner_forces, i, forces + 3 * i);
+  }
+  return first == INT32_MAX ? -1 : first;
+}
+
+}  // namespace
+
+int32_t fem_forces(const FemElementView<double>& elements, const int32_t* offsets, const int32_t* corners, int32_t nodes,
+                   const double* u, double* corner_forces, double* forces, int threads) {
+  return forces_impl(elements, offsets, corners, nodes, u, corner_forces, forces, threads);
+}
+
+int32_t fem_forces(const FemElementView<float>& elements, const int32_t* offsets, const int32_t* corners, int32_t nodes,
+                   const float* u, float* corner_forces, float* forces, int threads) {
+  return forces_impl(elements, offsets, corners, nodes, u, corner_forces, forces, threads);
+}
+
+int32_t fem_stiffness(const FemElementView<double>& el, const double* u, double* k, int threads) {
+  const int t = thread_count(threads, el.count / 8);
+  int32_t first = INT32_MAX;
+#pragma omp parallel for schedule(static) num_threads(t) reduction(min : first)
+  for (int32_t e = 0; e < el.count; ++e) {
+    double ue[12];
+    for (int a = 0; a < 4; ++a)
+      for (int c = 0; c < 3; ++c) ue[3 * a + c] = u[3 * el.tets[4 * e + a] + c];
+    if (!fem_element_stiffness(el.model, el.mu, el.lambda, ue, el.dm_inverse + 9 * e, el.volume[e], k + 144 * static_cast<int64_t>(e)) &&
+        e < first)
+      first = e;
+  }
+  return first == INT32_MAX ? -1 : first;
+}
+
+int32_t fem_explicit_step(const FemElementView<Real>& elements, const FemNodeView& nodes, const FemStepConstants& constants,
+                          Real* corner_forces, int threads, int32_t* non_finite_node) {
+  const int t = thread_count(threads, elements.count);
+  int32_t inverted = INT32_MAX, bad = INT32_MAX;
+#pragma omp parallel num_threads(t)
+  {
+#pragma omp for schedule(static) reduction(min : inverted)
+    for (int32_t e = 0; e < elements.count; ++e)
+      if (!fem_element_force_pass(elements, nodes.u, e, corner_forces) && e < inverted) inverted = e;
+    // The reduction is complete after the loop's barrier: every thread sees the same value.
+    if (inverted == INT32_MAX) {
+#pragma omp for schedule(static) reduction(min : bad)
+      for (int32_t i = 0; i < nodes.count; ++i)
+        if (!fem_node_update(nodes, constants, corner_forces, i) && i < bad) bad = i;
+    }
+  }
+  *non_finite_node = bad == INT32_MAX ? -1 : bad;
+  return inverted == INT32_MAX ? -1 : inverted;
+}
+
+int64_t fem_sphere_contact(Real* u, const double* rest, const Real* inv_mass, int32_t nodes, const FemSphereView& sphere,
+                           int threads) {
+  const int t = thread_count(threads, nodes);
+  int64_t moved = 0;
+#pragma omp parallel for schedule(static) num_threads(t) reduction(+ : moved)
+  for (int32_t i = 0; i < nodes; ++i) moved += fem_sphere_contact_node(u, rest, inv_mass, sphere, i) ? 1 : 0;
+  return moved;
+}
+
+}  // namespace ctsurg::sim::cpu

@@ -1,0 +1,118 @@
+// A scenario: what a ctsurg-sim run simulates and writes. Read from a YAML file (JSON works too: it
+// is YAML's flow style); data_samples/scenarios/ holds commented examples and docs/sim.md the full
+// reference. Every field is checked where it enters: an unknown key, a missing one, a wrong type or a
+// value out of range is an InputError naming the scenario file and the field's path
+// ("tools[1].path[0].t"). Input and output paths are relative to the scenario file's folder.
+//
+// Units: mm (LPS), s, g; Young's modulus Pa, density g/cm^3 in the file (g/mm^3 inside).
+#pragma once
+
+#include "ctsurg/sim/base/fixed_regions.h"
+#include "ctsurg/sim/base/material_presets.h"
+#include "ctsurg/sim/surface/surface_coupling.h"
+
+#include <array>
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+namespace ctsurg::sim {
+
+enum class ModelKind { spring_grid, explicit_springs, fem };
+enum class FemLaw { linear, stvk, neo_hookean };  // fem: the material law (fem_material.h)
+enum class FemSolver { dynamic, static_equilibrium };  // fem: explicit dynamics or static Newton per frame
+enum class SpringSource { grid, tetmesh };  // where explicit springs come from
+
+// A point given in one of three ways; resolved to LPS mm when the run starts (tool_path.h).
+struct PointSpec {
+  enum class Kind { position_mm, at_fraction, offset_mm };
+  Kind kind = Kind::position_mm;
+  // position_mm: LPS mm; at_fraction: (0..1)^3 of the tissue's rest bounding box (0 = its L, P, S
+  // minimum corner... 1 = maximum); offset_mm: mm from the tool's first keyframe.
+  std::array<double, 3> value{0, 0, 0};
+};
+
+struct Keyframe {
+  double t = 0;  // s
+  PointSpec point;
+};
+
+struct ToolAction {
+  enum class Kind { grab, probe, cut, force };
+  Kind kind = Kind::grab;
+  std::string label;                 // "tools[0] (grab)", for messages
+  double start_s = 0;                // active from start_s ...
+  double end_s = 0;                  // ... to end_s (grab: release), s; +inf = to the end of the run
+  double radius_mm = 0;              // grab, probe, force: sphere radius, mm (> 0)
+  std::vector<Keyframe> path;        // >= 1 keyframe, increasing t; the tool moves linearly between them
+  bool snap_to_tissue = false;       // shift the whole path so its first point is on the nearest particle
+  std::array<double, 3> blade_edge_mm{0, 0, 0};  // cut: the blade's edge, centred on the path (mm, != 0)
+  // force: a total force (N, LPS) shared equally by the particles or nodes inside the sphere at
+  // start_s (a point load: the FEM paper's experiment), applied until end_s.
+  std::array<double, 3> force_n{0, 0, 0};
+};
+
+// A picture the pipeline makes from the trajectory with ctsurg-render (scripts/Makefile); ctsurg-sim
+// only checks and lists them (ctsurg-sim --describe).
+struct RenderRequest {
+  std::string name;                 // the picture's file stem, e.g. "grab_heat" -> grab_heat.png ([A-Za-z0-9_-]+)
+  std::string layout = "single";    // single | side-by-side | overlay | heat-map
+  std::string frames = "last";      // ctsurg-render --frames: rest, last, all, N, A:B, A:B:STEP
+  std::string view = "anterior";    // anterior, posterior, left, right, superior, inferior, or "AZ,EL"
+  int size = 768;                   // pixels (square)
+  std::string reference;            // comparisons: empty = the rest surface, or another scenario's name
+};
+
+struct FixedRegionSpec {
+  enum class Kind { box, box_fraction, half_space, label };
+  Kind kind = Kind::box;
+  Box box;              // box: LPS mm; box_fraction: fractions of the rest bounding box
+  HalfSpace half_space;
+  uint16_t label = 0;
+};
+
+struct Scenario {
+  std::filesystem::path file;       // the scenario file (as given)
+  std::string name;
+  ModelKind model = ModelKind::spring_grid;
+  SpringSource springs_from = SpringSource::grid;
+  std::filesystem::path grid;       // occupancy grid file (ctsurg-grid); required except for kind: fem
+  std::filesystem::path surface;    // surface file (ctsurg-surface/-normalmap) on that grid; optional
+  std::filesystem::path tetmesh;    // tet mesh file (ctsurg-tetmesh): kind fem, or springs_from: tetmesh
+  CouplingMode coupling = CouplingMode::trilinear;
+  FemLaw fem_law = FemLaw::neo_hookean;         // kind: fem
+  FemSolver fem_solver = FemSolver::dynamic;    // kind: fem
+  bool mass_from_fraction = false;
+  Material material;                // preset, possibly with explicit overrides
+  double damping_per_s = 0;         // mass-proportional damping rate alpha, 1/s (Verlet factor alpha dt)
+  std::array<double, 3> gravity{0, 0, 0};  // mm/s^2, LPS
+  std::vector<FixedRegionSpec> fixed;
+  std::vector<ToolAction> tools;
+  double duration_s = 0;            // > 0
+  double dt_s = 0;                  // 0 = auto (safety_factor * critical step)
+  double safety_factor = 0.5;       // (0, 1]
+  int max_step_halvings = 0;        // on instability: restart from the last frame with dt / 2, this often
+  double frame_interval_s = 0;      // output frame every ...; > 0
+  bool write_particles = false;     // also store every particle's position per frame
+  std::filesystem::path trajectory; // output trajectory (.h5)
+  std::vector<RenderRequest> render;  // pictures for the pipeline to make (none: no rendering)
+  std::string backend = "cpu";      // cpu | cuda | auto
+  int threads = 0;                  // 0 = automatic
+};
+
+// Parses scenario text. `file` names it in messages; relative paths are resolved against `base_dir`.
+Scenario parse_scenario(const std::string& text, const std::filesystem::path& file, const std::filesystem::path& base_dir);
+// Reads and parses a scenario file (InputError naming it when it cannot be read).
+Scenario read_scenario_file(const std::filesystem::path& path);
+
+// What the scenario reads and writes, as JSON for the pipeline (ctsurg-sim --describe): the model
+// kind, the input files it names (grid, surface, tetmesh: those it needs), the trajectory, and the
+// render requests.
+std::string describe_scenario(const Scenario& scenario);
+
+const char* to_string(ModelKind kind);
+const char* to_string(FemLaw law);
+const char* to_string(ToolAction::Kind kind);
+
+}  // namespace ctsurg::sim

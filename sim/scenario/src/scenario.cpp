@@ -1,0 +1,425 @@
+#include "ctsurg/sim/scenario/scenario.h"
+
+#include "ctsurg/core/error.h"
+
+#include <nlohmann/json.hpp>
+#include <yaml-cpp/yaml.h>
+
+#include <cmath>
+#include <fstream>
+#include <limits>
+#include <set>
+#include <sstream>
+
+namespace ctsurg::sim {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+// A YAML node with its path in the document, for messages: every read names the file and the field.
+class Field {
+ public:
+  Field(YAML::Node node, std::string path, const std::string* file) : node_(std::move(node)), path_(std::move(path)), file_(file) {}
+
+  const std::string& path() const { return path_; }
+  [[noreturn]] void fail(const std::string& problem) const { throw InputError(*file_, path_.empty() ? "(top level)" : path_, problem); }
+  bool is_map() const { return node_.IsMap(); }
+  bool is_sequence() const { return node_.IsSequence(); }
+  bool is_scalar() const { return node_.IsScalar(); }
+
+  // A map's child; `required` fails when it is missing.
+  bool has(const std::string& key) const { return node_.IsMap() && node_[key]; }
+  Field child(const std::string& key) const {
+    if (!node_.IsMap()) fail("expected a map (key: value pairs)");
+    YAML::Node c = node_[key];
+    if (!c) Field(c, join(key), file_).fail("missing (required)");
+    return Field(c, join(key), file_);
+  }
+  std::vector<Field> items() const {
+    if (!node_.IsSequence()) fail("expected a list");
+    std::vector<Field> out;
+    for (size_t i = 0; i < node_.size(); ++i) out.emplace_back(node_[i], path_ + "[" + std::to_string(i) + "]", file_);
+    return out;
+  }
+  // Refuses keys that are not in `known` (a misspelt key would otherwise be silently ignored).
+  void only(std::initializer_list<const char*> known) const {
+    if (!node_.IsMap()) fail("expected a map (key: value pairs)");
+    const std::set<std::string> k(known.begin(), known.end());
+    for (const auto& kv : node_) {
+      const std::string key = kv.first.as<std::string>();
+      if (!k.count(key)) {
+        std::string list;
+        for (const auto& s : k) list += (list.empty() ? "" : ", ") + s;
+        Field(kv.second, join(key), file_).fail("unknown key (known here: " + list + ")");
+      }
+    }
+  }
+
+  std::string text() const {
+    if (!node_.IsScalar()) fail("expected a text value");
+    return node_.Scalar();
+  }
+  double number() const {
+    if (!node_.IsScalar()) fail("expected a number");
+    double v = 0;
+    try {
+      v = node_.as<double>();
+    } catch (const YAML::Exception&) {
+      fail("expected a number, got '" + node_.Scalar() + "'");
+    }
+    if (!std::isfinite(v)) fail("must be finite");
+    return v;
+  }
+  double positive() const {
+    const double v = number();
+    if (!(v > 0)) fail("must be > 0, got " + num(v));
+    return v;
+  }
+  double non_negative() const {
+    const double v = number();
+    if (v < 0) fail("must be >= 0, got " + num(v));
+    return v;
+  }
+  int64_t integer(int64_t lo, int64_t hi) const {
+    const double v = number();
+    if (v != std::floor(v) || v < static_cast<double>(lo) || v > static_cast<double>(hi)) {
+      fail("expected an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) + "], got " + node_.Scalar());
+    }
+    return static_cast<int64_t>(v);
+  }
+  bool boolean() const {
+    if (!node_.IsScalar()) fail("expected true or false");
+    try {
+      return node_.as<bool>();
+    } catch (const YAML::Exception&) {
+      fail("expected true or false, got '" + node_.Scalar() + "'");
+    }
+  }
+  std::array<double, 3> vec3() const {
+    if (!node_.IsSequence() || node_.size() != 3) fail("expected a list of 3 numbers [x, y, z]");
+    std::array<double, 3> v{};
+    const auto it = items();
+    for (int c = 0; c < 3; ++c) v[static_cast<size_t>(c)] = it[static_cast<size_t>(c)].number();
+    return v;
+  }
+  std::string one_of(std::initializer_list<const char*> allowed) const {
+    const std::string v = text();
+    std::string list;
+    for (const char* a : allowed) {
+      if (v == a) return v;
+      list += (list.empty() ? "" : ", ") + std::string(a);
+    }
+    fail("'" + v + "' is not one of: " + list);
+  }
+
+  static std::string num(double v) {
+    std::ostringstream s;
+    s << v;
+    return s.str();
+  }
+
+ private:
+  std::string join(const std::string& key) const { return path_.empty() ? key : path_ + "." + key; }
+  YAML::Node node_;
+  std::string path_;
+  const std::string* file_;
+};
+
+fs::path resolve(const fs::path& base, const std::string& p) {
+  const fs::path q(p);
+  return q.is_absolute() ? q : base / q;
+}
+
+PointSpec point_of(const Field& f, bool offset_allowed) {
+  int given = 0;
+  PointSpec p;
+  if (f.has("position_mm")) {
+    p = {PointSpec::Kind::position_mm, f.child("position_mm").vec3()};
+    ++given;
+  }
+  if (f.has("at_fraction")) {
+    p = {PointSpec::Kind::at_fraction, f.child("at_fraction").vec3()};
+    ++given;
+  }
+  if (f.has("offset_mm")) {
+    if (!offset_allowed) f.child("offset_mm").fail("the first keyframe needs position_mm or at_fraction");
+    p = {PointSpec::Kind::offset_mm, f.child("offset_mm").vec3()};
+    ++given;
+  }
+  if (given != 1) f.fail("give exactly one of position_mm, at_fraction" + std::string(offset_allowed ? ", offset_mm" : ""));
+  return p;
+}
+
+ToolAction tool_of(const Field& item) {
+  if (!item.is_map()) item.fail("expected one of grab:, probe:, cut: with the tool's fields under it");
+  int kinds = 0;
+  ToolAction t;
+  std::string key;
+  for (const char* k : {"grab", "probe", "cut", "force"}) {
+    if (item.has(k)) {
+      ++kinds;
+      key = k;
+    }
+  }
+  item.only({"grab", "probe", "cut", "force"});
+  if (kinds != 1) item.fail("each tool is exactly one of grab:, probe:, cut:, force:");
+  const Field f = item.child(key);
+  t.kind = key == "grab"    ? ToolAction::Kind::grab
+           : key == "probe" ? ToolAction::Kind::probe
+           : key == "cut"   ? ToolAction::Kind::cut
+                            : ToolAction::Kind::force;
+  t.label = item.path() + " (" + key + ")";
+  if (t.kind == ToolAction::Kind::cut) {
+    f.only({"start_s", "end_s", "path", "blade_edge_mm", "snap_to_tissue"});
+    t.blade_edge_mm = f.child("blade_edge_mm").vec3();
+    if (t.blade_edge_mm == std::array<double, 3>{0, 0, 0}) f.child("blade_edge_mm").fail("the blade edge must not be zero");
+  } else if (t.kind == ToolAction::Kind::force) {
+    f.only({"start_s", "end_s", "path", "radius_mm", "force_n", "snap_to_tissue"});
+    t.radius_mm = f.child("radius_mm").positive();
+    t.force_n = f.child("force_n").vec3();
+  } else {
+    f.only({"start_s", "end_s", "path", "radius_mm", "snap_to_tissue"});
+    t.radius_mm = f.child("radius_mm").positive();
+  }
+  const auto keys = f.child("path").items();
+  if (keys.empty()) f.child("path").fail("needs at least one keyframe");
+  for (size_t i = 0; i < keys.size(); ++i) {
+    keys[i].only({"t", "position_mm", "at_fraction", "offset_mm"});
+    Keyframe k;
+    k.t = keys[i].child("t").non_negative();
+    if (i > 0 && !(k.t > t.path.back().t)) keys[i].child("t").fail("keyframe times must increase");
+    k.point = point_of(keys[i], i > 0);
+    t.path.push_back(k);
+  }
+  t.start_s = f.has("start_s") ? f.child("start_s").non_negative() : t.path.front().t;
+  t.end_s = f.has("end_s") ? f.child("end_s").positive() : std::numeric_limits<double>::infinity();
+  if (!(t.end_s > t.start_s)) f.child("end_s").fail("must be after start_s");
+  if (f.has("snap_to_tissue")) t.snap_to_tissue = f.child("snap_to_tissue").boolean();
+  return t;
+}
+
+FixedRegionSpec fixed_of(const Field& item) {
+  item.only({"box", "box_fraction", "half_space", "label"});
+  FixedRegionSpec r;
+  int given = 0;
+  const auto box_of = [&](const Field& b) {
+    b.only({"min", "max"});
+    Box box{b.child("min").vec3(), b.child("max").vec3()};
+    for (int c = 0; c < 3; ++c) {
+      if (box.min[static_cast<size_t>(c)] > box.max[static_cast<size_t>(c)]) b.child("max").fail("each max must be >= its min");
+    }
+    return box;
+  };
+  if (item.has("box")) {
+    r.kind = FixedRegionSpec::Kind::box;
+    r.box = box_of(item.child("box"));
+    ++given;
+  }
+  if (item.has("box_fraction")) {
+    r.kind = FixedRegionSpec::Kind::box_fraction;
+    r.box = box_of(item.child("box_fraction"));
+    ++given;
+  }
+  if (item.has("half_space")) {
+    const Field h = item.child("half_space");
+    h.only({"point_mm", "normal"});
+    r.kind = FixedRegionSpec::Kind::half_space;
+    r.half_space = {h.child("point_mm").vec3(), h.child("normal").vec3()};
+    if (r.half_space.normal == std::array<double, 3>{0, 0, 0}) h.child("normal").fail("must not be zero");
+    ++given;
+  }
+  if (item.has("label")) {
+    r.kind = FixedRegionSpec::Kind::label;
+    r.label = static_cast<uint16_t>(item.child("label").integer(1, 65535));
+    ++given;
+  }
+  if (given != 1) item.fail("each fixed region is exactly one of box, box_fraction, half_space, label");
+  return r;
+}
+
+}  // namespace
+
+const char* to_string(ModelKind kind) {
+  return kind == ModelKind::spring_grid ? "spring_grid" : kind == ModelKind::fem ? "fem" : "explicit_springs";
+}
+const char* to_string(FemLaw law) { return law == FemLaw::linear ? "linear" : law == FemLaw::stvk ? "stvk" : "neo_hookean"; }
+
+std::string describe_scenario(const Scenario& s) {
+  nlohmann::json j;
+  j["name"] = s.name;
+  j["model"] = to_string(s.model);
+  if (s.model == ModelKind::fem) {
+    j["material_law"] = to_string(s.fem_law);
+    j["solver"] = s.fem_solver == FemSolver::dynamic ? "dynamic" : "static";
+  }
+  // The inputs the run reads: a grid unless the model is FEM (or explicit springs from a tet mesh),
+  // a tet mesh for FEM and tet-mesh springs, the surface when one is named.
+  nlohmann::json inputs = nlohmann::json::object();
+  const bool grid_used = s.model == ModelKind::spring_grid || (s.model == ModelKind::explicit_springs && s.springs_from == SpringSource::grid);
+  if (grid_used || !s.grid.empty()) inputs["grid"] = s.grid.string();
+  if (s.model == ModelKind::fem || (s.model == ModelKind::explicit_springs && s.springs_from == SpringSource::tetmesh)) {
+    inputs["tetmesh"] = s.tetmesh.string();
+  }
+  if (!s.surface.empty()) inputs["surface"] = s.surface.string();
+  j["inputs"] = inputs;
+  j["trajectory"] = s.trajectory.string();
+  nlohmann::json render = nlohmann::json::array();
+  for (const auto& r : s.render) {
+    render.push_back({{"name", r.name}, {"layout", r.layout}, {"frames", r.frames}, {"view", r.view}, {"size", r.size},
+                      {"reference", r.reference}});
+  }
+  j["render"] = render;
+  return j.dump(2);
+}
+const char* to_string(ToolAction::Kind kind) {
+  return kind == ToolAction::Kind::grab ? "grab" : kind == ToolAction::Kind::probe ? "probe" : kind == ToolAction::Kind::cut ? "cut" : "force";
+}
+
+Scenario parse_scenario(const std::string& text, const fs::path& file, const fs::path& base_dir) {
+  const std::string name = file.string();
+  YAML::Node doc;
+  try {
+    doc = YAML::Load(text);
+  } catch (const YAML::Exception& e) {
+    throw InputError(name, "line " + std::to_string(e.mark.line + 1), "not valid YAML or JSON: " + e.msg);
+  }
+  const Field top(doc, "", &name);
+  if (!top.is_map()) top.fail("a scenario is a map of sections (name, model, material, time, output, ...)");
+  top.only({"ctsurg_scenario", "name", "model", "material", "gravity_mm_per_s2", "fixed", "tools", "time", "output",
+            "render", "backend", "threads"});
+  Scenario s;
+  s.file = file;
+  if (top.child("ctsurg_scenario").integer(1, 1000) != 1) top.child("ctsurg_scenario").fail("this ctsurg reads version 1");
+  s.name = top.has("name") ? top.child("name").text() : file.stem().string();
+
+  const Field m = top.child("model");
+  m.only({"kind", "grid", "surface", "tetmesh", "springs_from", "coupling", "mass_from_fraction", "material_law", "solver"});
+  const std::string kind = m.child("kind").one_of({"spring_grid", "explicit_springs", "fem"});
+  s.model = kind == "spring_grid" ? ModelKind::spring_grid : kind == "fem" ? ModelKind::fem : ModelKind::explicit_springs;
+  if (s.model != ModelKind::fem || m.has("grid")) s.grid = resolve(base_dir, m.child("grid").text());
+  if (m.has("material_law") || m.has("solver")) {
+    if (s.model != ModelKind::fem) m.child(m.has("solver") ? "solver" : "material_law").fail("only for kind: fem");
+  }
+  if (m.has("material_law")) {
+    const std::string law = m.child("material_law").one_of({"linear", "stvk", "neo_hookean"});
+    s.fem_law = law == "linear" ? FemLaw::linear : law == "stvk" ? FemLaw::stvk : FemLaw::neo_hookean;
+  }
+  if (m.has("solver")) {
+    s.fem_solver = m.child("solver").one_of({"dynamic", "static"}) == std::string("static") ? FemSolver::static_equilibrium
+                                                                                             : FemSolver::dynamic;
+  }
+  if (m.has("surface")) s.surface = resolve(base_dir, m.child("surface").text());
+  if (m.has("springs_from")) {
+    if (s.model != ModelKind::explicit_springs) m.child("springs_from").fail("only for kind: explicit_springs");
+    s.springs_from = m.child("springs_from").one_of({"grid", "tetmesh"}) == std::string("grid") ? SpringSource::grid
+                                                                                               : SpringSource::tetmesh;
+  }
+  if (m.has("tetmesh")) s.tetmesh = resolve(base_dir, m.child("tetmesh").text());
+  if (s.springs_from == SpringSource::tetmesh && s.tetmesh.empty()) m.child("tetmesh").fail("missing (springs_from: tetmesh)");
+  if (s.model == ModelKind::fem && s.tetmesh.empty()) throw InputError(name, "model.tetmesh", "missing (kind: fem needs a tet mesh)");
+  if (m.has("coupling")) {
+    s.coupling = m.child("coupling").one_of({"trilinear", "nearest_particle"}) == std::string("trilinear")
+                     ? CouplingMode::trilinear
+                     : CouplingMode::nearest_particle;
+  }
+  if (m.has("mass_from_fraction")) s.mass_from_fraction = m.child("mass_from_fraction").boolean();
+
+  const Field mat = top.child("material");
+  mat.only({"preset", "youngs_modulus_pa", "poisson_ratio", "density_g_per_cm3", "damping_per_s"});
+  s.material = mat.has("preset") ? material_preset(mat.child("preset").text(), name, mat.child("preset").path())
+                                 : Material{"custom", 0, 0.45, 1.06e-3, "scenario"};
+  if (mat.has("youngs_modulus_pa")) s.material.youngs_modulus_pa = mat.child("youngs_modulus_pa").positive();
+  if (mat.has("poisson_ratio")) s.material.poisson_ratio = mat.child("poisson_ratio").number();
+  if (mat.has("density_g_per_cm3")) s.material.density = mat.child("density_g_per_cm3").positive() * 1e-3;
+  if (!mat.has("preset") && !mat.has("youngs_modulus_pa")) mat.fail("give a preset or youngs_modulus_pa");
+  if (mat.has("youngs_modulus_pa") || mat.has("poisson_ratio") || mat.has("density_g_per_cm3")) {
+    s.material.source = mat.has("preset") ? s.material.name + " preset with values from the scenario" : "scenario";
+    if (!mat.has("preset")) s.material.name = "custom";
+  }
+  validate_material(s.material, name);
+  if (mat.has("damping_per_s")) s.damping_per_s = mat.child("damping_per_s").non_negative();
+
+  if (top.has("gravity_mm_per_s2")) s.gravity = top.child("gravity_mm_per_s2").vec3();
+  if (top.has("fixed")) {
+    for (const auto& item : top.child("fixed").items()) s.fixed.push_back(fixed_of(item));
+  }
+  if (top.has("tools")) {
+    for (const auto& item : top.child("tools").items()) {
+      s.tools.push_back(tool_of(item));
+      // FEM tools: grab (prescribed displacements) and probe (sphere contact, dynamic only); cutting
+      // a tet mesh is not implemented (the spring models cut).
+      if (s.model == ModelKind::fem && s.tools.back().kind == ToolAction::Kind::cut) {
+        item.fail("cut needs a spring model (kind: spring_grid or explicit_springs); the FEM models do not cut");
+      }
+      if (s.model == ModelKind::fem && s.fem_solver == FemSolver::static_equilibrium &&
+          s.tools.back().kind == ToolAction::Kind::probe) {
+        item.fail("probe needs solver: dynamic (contact is not part of the static solver)");
+      }
+    }
+  }
+
+  const Field t = top.child("time");
+  t.only({"duration_s", "dt_s", "safety_factor", "max_step_halvings"});
+  s.duration_s = t.child("duration_s").positive();
+  if (t.has("dt_s")) {
+    const Field dt = t.child("dt_s");
+    if (dt.is_scalar() && dt.text() == "auto") {
+      s.dt_s = 0;
+    } else {
+      s.dt_s = dt.positive();
+      if (s.dt_s > s.duration_s) dt.fail("the step is longer than the run");
+    }
+  }
+  if (t.has("safety_factor")) {
+    s.safety_factor = t.child("safety_factor").positive();
+    if (s.safety_factor > 1) t.child("safety_factor").fail("must be in (0, 1]");
+  }
+  if (t.has("max_step_halvings")) s.max_step_halvings = static_cast<int>(t.child("max_step_halvings").integer(0, 10));
+  for (const auto& tool : s.tools) {
+    if (tool.start_s >= s.duration_s) {
+      throw InputError(name, tool.label + ".start_s", "the tool starts after the run ends (duration_s " +
+                                                          Field::num(s.duration_s) + ")");
+    }
+  }
+
+  const Field o = top.child("output");
+  o.only({"trajectory", "frame_interval_s", "particles"});
+  s.trajectory = resolve(base_dir, o.child("trajectory").text());
+  s.frame_interval_s = o.has("frame_interval_s") ? o.child("frame_interval_s").positive() : s.duration_s / 50;
+  if (s.frame_interval_s > s.duration_s) o.child("frame_interval_s").fail("longer than the run");
+  if (o.has("particles")) s.write_particles = o.child("particles").boolean();
+  if (top.has("render")) {
+    for (const auto& item : top.child("render").items()) {
+      item.only({"name", "layout", "frames", "view", "size", "reference"});
+      RenderRequest r;
+      r.name = item.child("name").text();
+      if (r.name.empty() || r.name.find_first_not_of("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789_-") !=
+                                std::string::npos) {
+        item.child("name").fail("use letters, digits, '_' and '-' only (it names a file)");
+      }
+      for (const auto& other : s.render) {
+        if (other.name == r.name) item.child("name").fail("'" + r.name + "' is used twice");
+      }
+      if (item.has("layout")) r.layout = item.child("layout").one_of({"single", "side-by-side", "overlay", "heat-map"});
+      if (item.has("frames")) r.frames = item.child("frames").text();
+      if (item.has("view")) r.view = item.child("view").text();
+      if (item.has("size")) r.size = static_cast<int>(item.child("size").integer(16, 8192));
+      if (item.has("reference")) r.reference = item.child("reference").text();
+      s.render.push_back(r);
+    }
+  }
+  if (top.has("backend")) s.backend = top.child("backend").one_of({"cpu", "cuda", "auto"});
+  if (top.has("threads")) s.threads = static_cast<int>(top.child("threads").integer(0, 1024));
+  return s;
+}
+
+Scenario read_scenario_file(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path.string(), "(file)", "cannot be opened");
+  std::ostringstream text;
+  text << in.rdbuf();
+  return parse_scenario(text.str(), path, path.parent_path());
+}
+
+}  // namespace ctsurg::sim

@@ -1,0 +1,205 @@
+// Tests for ctsurg/sim/scenario/scenario.h: a full scenario parses into the documented fields
+// (presets, overrides, regions, tools, paths resolved against the file's folder); JSON works; every
+// kind of mistake is an InputError naming the file and the field.
+#include "ctsurg/sim/scenario/scenario.h"
+
+#include "ctsurg/core/error.h"
+#include "test_support.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+
+namespace fs = std::filesystem;
+using ctsurg::sim::parse_scenario;
+
+namespace {
+
+const char* kFull = R"(
+ctsurg_scenario: 1
+name: grab test
+model:
+  kind: spring_grid
+  grid: grid.h5
+  surface: out/surface.h5
+  coupling: nearest_particle
+material:
+  preset: liver
+  youngs_modulus_pa: 8000
+  damping_per_s: 20
+gravity_mm_per_s2: [0, 0, -9810]
+fixed:
+  - box_fraction: {min: [0, 0, 0], max: [1, 1, 0.2]}
+  - half_space: {point_mm: [0, 0, 10], normal: [0, 0, 1]}
+  - label: 2
+tools:
+  - grab:
+      radius_mm: 5
+      start_s: 0.1
+      end_s: 0.5
+      snap_to_tissue: true
+      path:
+        - {t: 0.1, at_fraction: [0.5, 0.0, 0.5]}
+        - {t: 0.4, offset_mm: [0, -10, 0]}
+  - cut:
+      blade_edge_mm: [0, 0, 20]
+      path:
+        - {t: 0.2, position_mm: [1, 2, 3]}
+        - {t: 0.3, position_mm: [11, 2, 3]}
+time:
+  duration_s: 0.6
+  dt_s: auto
+  max_step_halvings: 2
+output:
+  trajectory: traj.h5
+  frame_interval_s: 0.02
+)";
+
+std::string error_of(const std::string& text) {
+  try {
+    (void)parse_scenario(text, "s.yaml", "/base");
+  } catch (const ctsurg::InputError& e) {
+    return e.what();
+  }
+  return "(accepted)";
+}
+
+std::string replaced(std::string text, const std::string& from, const std::string& to) {
+  const size_t at = text.find(from);
+  EXPECT_NE(at, std::string::npos) << from;
+  return text.replace(at, from.size(), to);
+}
+
+}  // namespace
+
+TEST(Scenario, FullScenarioParsesEveryField) {
+  const auto s = parse_scenario(kFull, "dir/s.yaml", "/base");
+  EXPECT_EQ(s.name, "grab test");
+  EXPECT_EQ(s.model, ctsurg::sim::ModelKind::spring_grid);
+  EXPECT_EQ(s.grid, fs::path("/base/grid.h5"));
+  EXPECT_EQ(s.surface, fs::path("/base/out/surface.h5"));
+  EXPECT_EQ(s.coupling, ctsurg::sim::CouplingMode::nearest_particle);
+  EXPECT_EQ(s.material.youngs_modulus_pa, 8000);  // the override
+  EXPECT_EQ(s.material.poisson_ratio, 0.45);      // from the preset
+  EXPECT_NEAR(s.material.density, 1.06e-3, 1e-12);
+  EXPECT_EQ(s.damping_per_s, 20);
+  EXPECT_EQ(s.gravity[2], -9810);
+  ASSERT_EQ(s.fixed.size(), 3u);
+  EXPECT_EQ(s.fixed[0].kind, ctsurg::sim::FixedRegionSpec::Kind::box_fraction);
+  EXPECT_EQ(s.fixed[0].box.max[2], 0.2);
+  EXPECT_EQ(s.fixed[1].half_space.point[2], 10);
+  EXPECT_EQ(s.fixed[2].label, 2);
+  ASSERT_EQ(s.tools.size(), 2u);
+  EXPECT_EQ(s.tools[0].kind, ctsurg::sim::ToolAction::Kind::grab);
+  EXPECT_EQ(s.tools[0].radius_mm, 5);
+  EXPECT_EQ(s.tools[0].end_s, 0.5);
+  EXPECT_TRUE(s.tools[0].snap_to_tissue);
+  ASSERT_EQ(s.tools[0].path.size(), 2u);
+  EXPECT_EQ(s.tools[0].path[1].point.kind, ctsurg::sim::PointSpec::Kind::offset_mm);
+  EXPECT_EQ(s.tools[1].kind, ctsurg::sim::ToolAction::Kind::cut);
+  EXPECT_EQ(s.tools[1].start_s, 0.2);  // defaults to the first keyframe
+  EXPECT_TRUE(std::isinf(s.tools[1].end_s));
+  EXPECT_EQ(s.tools[1].blade_edge_mm[2], 20);
+  EXPECT_EQ(s.duration_s, 0.6);
+  EXPECT_EQ(s.dt_s, 0);  // auto
+  EXPECT_EQ(s.max_step_halvings, 2);
+  EXPECT_EQ(s.trajectory, fs::path("/base/traj.h5"));
+  EXPECT_EQ(s.frame_interval_s, 0.02);
+}
+
+TEST(Scenario, JsonIsAccepted) {
+  const auto s = parse_scenario(
+      R"({"ctsurg_scenario": 1, "model": {"kind": "explicit_springs", "grid": "g.h5", "springs_from": "tetmesh",
+          "tetmesh": "t.h5"}, "material": {"preset": "kidney"}, "time": {"duration_s": 1, "dt_s": 1e-4},
+          "output": {"trajectory": "o.h5"}})",
+      "s.json", "/b");
+  EXPECT_EQ(s.model, ctsurg::sim::ModelKind::explicit_springs);
+  EXPECT_EQ(s.springs_from, ctsurg::sim::SpringSource::tetmesh);
+  EXPECT_EQ(s.tetmesh, fs::path("/b/t.h5"));
+  EXPECT_EQ(s.material.youngs_modulus_pa, 10e3);
+  EXPECT_EQ(s.dt_s, 1e-4);
+  EXPECT_EQ(s.name, "s");
+  EXPECT_NEAR(s.frame_interval_s, 0.02, 1e-15);  // 50 frames by default
+}
+
+TEST(Scenario, MistakesNameTheFileAndTheField) {
+  struct Case {
+    std::string from, to, expected;
+  };
+  const Case cases[] = {
+      {"kind: spring_grid", "kind: springs", "s.yaml: model.kind: 'springs' is not one of"},
+      {"  preset: liver", "  preset: spleen", "s.yaml: material.preset: unknown material preset 'spleen' (known: myocardium"},
+      {"youngs_modulus_pa: 8000", "youngs_modulus_pa: -3", "material.youngs_modulus_pa: must be > 0"},
+      {"damping_per_s: 20", "damping_per_s: 20\n  poisson_ratio: 0.5", "material.poisson_ratio: must be in (-1, 0.5)"},
+      {"duration_s: 0.6", "duration_s: soon", "time.duration_s: expected a number, got 'soon'"},
+      {"radius_mm: 5", "radius_mm: 0", "tools[0].grab.radius_mm: must be > 0"},
+      {"{t: 0.4, offset_mm", "{t: 0.05, offset_mm", "tools[0].grab.path[1].t: keyframe times must increase"},
+      {"{t: 0.1, at_fraction: [0.5, 0.0, 0.5]}", "{t: 0.1, offset_mm: [0, 0, 1]}",
+       "tools[0].grab.path[0].offset_mm: the first keyframe needs position_mm or at_fraction"},
+      {"blade_edge_mm: [0, 0, 20]", "blade_edge_mm: [0, 20]", "tools[1].cut.blade_edge_mm: expected a list of 3 numbers"},
+      {"  - label: 2", "  - label: 2\n    box: {min: [0, 0, 0], max: [1, 1, 1]}", "fixed[2]: each fixed region is exactly one of"},
+      {"max: [1, 1, 0.2]", "max: [1, 1, -0.2]", "fixed[0].box_fraction.max: each max must be >= its min"},
+      {"gravity_mm_per_s2", "gravity", "s.yaml: gravity: unknown key (known here:"},
+      {"frame_interval_s: 0.02", "frame_interval_s: 2", "output.frame_interval_s: longer than the run"},
+      {"ctsurg_scenario: 1", "ctsurg_scenario: 2", "ctsurg_scenario: this ctsurg reads version 1"},
+      {"  trajectory: traj.h5\n", "", "output.trajectory: missing (required)"},
+      {"      start_s: 0.1\n      end_s: 0.5", "      start_s: 0.7", "tools[0] (grab).start_s: the tool starts after the run ends"},
+      {"dt_s: auto", "dt_s: 2", "time.dt_s: the step is longer than the run"},
+      {"name: grab test", "name: [grab", "s.yaml: line "},
+  };
+  for (const auto& c : cases) {
+    const std::string e = error_of(replaced(kFull, c.from, c.to));
+    EXPECT_NE(e.find(c.expected), std::string::npos) << "for " << c.to << "\n got: " << e;
+  }
+}
+
+TEST(Scenario, UnreadableFileIsNamed) {
+  try {
+    (void)ctsurg::sim::read_scenario_file("/nonexistent/s.yaml");
+    ADD_FAILURE();
+  } catch (const ctsurg::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("/nonexistent/s.yaml"), std::string::npos);
+  }
+}
+
+TEST(Scenario, FemKindsAndTheirRules) {
+  const std::string base =
+      "ctsurg_scenario: 1\nmodel:\n  kind: fem\n  tetmesh: t.h5\n  material_law: stvk\n  solver: static\n"
+      "material: {preset: kidney}\ntime: {duration_s: 1}\noutput: {trajectory: o.h5}\n";
+  const auto s = parse_scenario(base, "f.yaml", "/b");
+  EXPECT_EQ(s.model, ctsurg::sim::ModelKind::fem);
+  EXPECT_EQ(s.fem_law, ctsurg::sim::FemLaw::stvk);
+  EXPECT_EQ(s.fem_solver, ctsurg::sim::FemSolver::static_equilibrium);
+  EXPECT_TRUE(s.grid.empty());  // no grid for an FEM scene
+  const auto describe = ctsurg::sim::describe_scenario(s);
+  EXPECT_NE(describe.find("\"tetmesh\": \"/b/t.h5\""), std::string::npos) << describe;
+  EXPECT_EQ(describe.find("\"grid\""), std::string::npos) << describe;
+  const auto error = [&](const std::string& text) {
+    try {
+      (void)parse_scenario(text, "f.yaml", "/b");
+    } catch (const ctsurg::InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("(accepted)");
+  };
+  EXPECT_NE(error(base + "tools:\n  - cut: {blade_edge_mm: [0, 0, 1], path: [{t: 0, position_mm: [0, 0, 0]}]}\n")
+                .find("f.yaml: tools[0]: cut needs a spring model"),
+            std::string::npos);
+  EXPECT_NE(error(base + "tools:\n  - probe: {radius_mm: 2, path: [{t: 0, position_mm: [0, 0, 0]}]}\n").find("probe needs solver: dynamic"),
+            std::string::npos);
+  EXPECT_NE(error(replaced(base, "  tetmesh: t.h5\n", "")).find("model.tetmesh: missing (kind: fem needs a tet mesh)"), std::string::npos);
+  EXPECT_NE(error(replaced(base, "kind: fem", "kind: spring_grid\n  grid: g.h5")).find("model.solver: only for kind: fem"),
+            std::string::npos);
+}
+
+TEST(Scenario, RenderRequestsAreChecked) {
+  const std::string base = std::string(kFull) + "render:\n  - {name: a, layout: heat-map, frames: \"10\", size: 256}\n";
+  const auto s = parse_scenario(base, "s.yaml", "/base");
+  ASSERT_EQ(s.render.size(), 1u);
+  EXPECT_EQ(s.render[0].layout, "heat-map");
+  EXPECT_EQ(s.render[0].size, 256);
+  EXPECT_NE(error_of(base + "  - {name: a}\n").find("render[1].name: 'a' is used twice"), std::string::npos);
+  EXPECT_NE(error_of(base + "  - {name: a/b}\n").find("render[1].name: use letters"), std::string::npos);
+  EXPECT_NE(error_of(base + "  - {name: b, layout: mosaic}\n").find("render[1].layout: 'mosaic' is not one of"), std::string::npos);
+}
