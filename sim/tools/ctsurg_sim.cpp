@@ -1,7 +1,8 @@
-// ctsurg-sim SCENARIO.yaml: runs a surgical rehearsal scenario (a spring-mass model of the tissue, its
-// fixed regions and a timeline of grab, probe and cut tools) and writes the trajectory: the surface at
-// each output frame, per-frame metrics and the tools, as an HDF5 file with an XDMF sidecar for
-// ParaView. See docs/sim.md and data_samples/scenarios/.
+// ctsurg-sim SCENARIO.yaml: runs a surgical rehearsal scenario (a model of the tissue: spring-mass on
+// the voxel grid or on explicit springs, or tetrahedral FEM; its fixed regions; a timeline of grab,
+// probe, cut and force tools) and writes the trajectory: the surface at each output frame, per-frame
+// metrics and the tools, as an HDF5 file with an XDMF sidecar for ParaView. See docs/sim.md and
+// data_samples/scenarios/.
 #include "ctsurg/core/error.h"
 #include "ctsurg/core/progress_bar.h"
 #include "ctsurg/core/provenance.h"
@@ -9,6 +10,7 @@
 #include "ctsurg/core/trajectory_file.h"
 #include "ctsurg/core/version.h"
 #include "ctsurg/sim/scenario/scenario.h"
+#include "ctsurg/sim/scenario/scenario_model.h"
 #include "ctsurg/sim/scenario/scenario_run.h"
 
 #include <spdlog/spdlog.h>
@@ -24,10 +26,11 @@ int main(int argc, char** argv) {
   bool describe = false;
   return ctsurg::run_tool(
       argc, argv, "ctsurg-sim",
-      "Runs a scenario file (YAML or JSON): a spring-mass model of the tissue (implicit 18-neighbour grid or "
-      "explicit springs), fixed regions and a timeline of grab, probe and cut tools. Writes the trajectory "
-      "(surface per output frame, metrics, tools; HDF5 + XDMF). Paths in the scenario are relative to its folder; "
-      "the options below override them.",
+      "Runs a scenario file (YAML or JSON): a model of the tissue (spring-mass on the implicit 18-neighbour grid "
+      "or on explicit springs; tetrahedral FEM: linear, St. Venant-Kirchhoff or Neo-Hookean, dynamic or "
+      "quasi-static), fixed regions and a timeline of grab, probe, cut and force tools, on the CPU or a CUDA "
+      "device. Writes the trajectory (surface per output frame, metrics, tools; HDF5 + XDMF). Paths in the "
+      "scenario are relative to its folder; the options below override them.",
       [&](CLI::App& app) {
         app.add_option("scenario", scenario_path, "Scenario file (.yaml, .yml or .json)")->required();
         app.add_option("-o,--output", output, "Trajectory to write (.h5); default: the scenario's output.trajectory");
@@ -86,12 +89,10 @@ int main(int argc, char** argv) {
         }
         ctsurg::Provenance provenance{ctx.name, ctsurg::kVersion, ctx.command_line, {}, nlohmann::json::array()};
         provenance.add_input(scenario_path);
-        if (!s.grid.empty()) provenance.add_input(s.grid);
-        if (!s.surface.empty()) provenance.add_input(s.surface);
-        if (s.model == ctsurg::sim::ModelKind::fem ||
-            (s.model == ctsurg::sim::ModelKind::explicit_springs && s.springs_from == ctsurg::sim::SpringSource::tetmesh)) {
-          provenance.add_input(s.tetmesh);
-        }
+        const ctsurg::sim::ModelInputs read = ctsurg::sim::model_inputs(s);
+        if (read.grid) provenance.add_input(s.grid);
+        if (read.surface) provenance.add_input(s.surface);
+        if (read.tetmesh) provenance.add_input(s.tetmesh);
         ctsurg::write_trajectory_file(s.trajectory, traj, provenance);
         spdlog::info("sim: wrote {} ({} frames, {} vertices)", s.trajectory.string(), traj.frame_count(), traj.vertex_count());
       });

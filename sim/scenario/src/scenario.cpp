@@ -1,6 +1,8 @@
 #include "ctsurg/sim/scenario/scenario.h"
 
 #include "ctsurg/core/error.h"
+#include "ctsurg/sim/scenario/scenario_model.h"
+#include "yaml_field.h"
 
 #include <nlohmann/json.hpp>
 #include <yaml-cpp/yaml.h>
@@ -17,121 +19,12 @@ namespace fs = std::filesystem;
 
 namespace {
 
-// A YAML node with its path in the document, for messages: every read names the file and the field.
-class Field {
- public:
-  Field(YAML::Node node, std::string path, const std::string* file) : node_(std::move(node)), path_(std::move(path)), file_(file) {}
-
-  const std::string& path() const { return path_; }
-  [[noreturn]] void fail(const std::string& problem) const { throw InputError(*file_, path_.empty() ? "(top level)" : path_, problem); }
-  bool is_map() const { return node_.IsMap(); }
-  bool is_sequence() const { return node_.IsSequence(); }
-  bool is_scalar() const { return node_.IsScalar(); }
-
-  // A map's child; `required` fails when it is missing.
-  bool has(const std::string& key) const { return node_.IsMap() && node_[key]; }
-  Field child(const std::string& key) const {
-    if (!node_.IsMap()) fail("expected a map (key: value pairs)");
-    YAML::Node c = node_[key];
-    if (!c) Field(c, join(key), file_).fail("missing (required)");
-    return Field(c, join(key), file_);
-  }
-  std::vector<Field> items() const {
-    if (!node_.IsSequence()) fail("expected a list");
-    std::vector<Field> out;
-    for (size_t i = 0; i < node_.size(); ++i) out.emplace_back(node_[i], path_ + "[" + std::to_string(i) + "]", file_);
-    return out;
-  }
-  // Refuses keys that are not in `known` (a misspelt key would otherwise be silently ignored).
-  void only(std::initializer_list<const char*> known) const {
-    if (!node_.IsMap()) fail("expected a map (key: value pairs)");
-    const std::set<std::string> k(known.begin(), known.end());
-    for (const auto& kv : node_) {
-      const std::string key = kv.first.as<std::string>();
-      if (!k.count(key)) {
-        std::string list;
-        for (const auto& s : k) list += (list.empty() ? "" : ", ") + s;
-        Field(kv.second, join(key), file_).fail("unknown key (known here: " + list + ")");
-      }
-    }
-  }
-
-  std::string text() const {
-    if (!node_.IsScalar()) fail("expected a text value");
-    return node_.Scalar();
-  }
-  double number() const {
-    if (!node_.IsScalar()) fail("expected a number");
-    double v = 0;
-    try {
-      v = node_.as<double>();
-    } catch (const YAML::Exception&) {
-      fail("expected a number, got '" + node_.Scalar() + "'");
-    }
-    if (!std::isfinite(v)) fail("must be finite");
-    return v;
-  }
-  double positive() const {
-    const double v = number();
-    if (!(v > 0)) fail("must be > 0, got " + num(v));
-    return v;
-  }
-  double non_negative() const {
-    const double v = number();
-    if (v < 0) fail("must be >= 0, got " + num(v));
-    return v;
-  }
-  int64_t integer(int64_t lo, int64_t hi) const {
-    const double v = number();
-    if (v != std::floor(v) || v < static_cast<double>(lo) || v > static_cast<double>(hi)) {
-      fail("expected an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) + "], got " + node_.Scalar());
-    }
-    return static_cast<int64_t>(v);
-  }
-  bool boolean() const {
-    if (!node_.IsScalar()) fail("expected true or false");
-    try {
-      return node_.as<bool>();
-    } catch (const YAML::Exception&) {
-      fail("expected true or false, got '" + node_.Scalar() + "'");
-    }
-  }
-  std::array<double, 3> vec3() const {
-    if (!node_.IsSequence() || node_.size() != 3) fail("expected a list of 3 numbers [x, y, z]");
-    std::array<double, 3> v{};
-    const auto it = items();
-    for (int c = 0; c < 3; ++c) v[static_cast<size_t>(c)] = it[static_cast<size_t>(c)].number();
-    return v;
-  }
-  std::string one_of(std::initializer_list<const char*> allowed) const {
-    const std::string v = text();
-    std::string list;
-    for (const char* a : allowed) {
-      if (v == a) return v;
-      list += (list.empty() ? "" : ", ") + std::string(a);
-    }
-    fail("'" + v + "' is not one of: " + list);
-  }
-
-  static std::string num(double v) {
-    std::ostringstream s;
-    s << v;
-    return s.str();
-  }
-
- private:
-  std::string join(const std::string& key) const { return path_.empty() ? key : path_ + "." + key; }
-  YAML::Node node_;
-  std::string path_;
-  const std::string* file_;
-};
-
 fs::path resolve(const fs::path& base, const std::string& p) {
   const fs::path q(p);
   return q.is_absolute() ? q : base / q;
 }
 
-PointSpec point_of(const Field& f, bool offset_allowed) {
+PointSpec point_of(const YamlField& f, bool offset_allowed) {
   int given = 0;
   PointSpec p;
   if (f.has("position_mm")) {
@@ -151,7 +44,7 @@ PointSpec point_of(const Field& f, bool offset_allowed) {
   return p;
 }
 
-ToolAction tool_of(const Field& item) {
+ToolAction tool_of(const YamlField& item) {
   if (!item.is_map()) item.fail("expected one of grab:, probe:, cut: with the tool's fields under it");
   int kinds = 0;
   ToolAction t;
@@ -164,17 +57,17 @@ ToolAction tool_of(const Field& item) {
   }
   item.only({"grab", "probe", "cut", "force"});
   if (kinds != 1) item.fail("each tool is exactly one of grab:, probe:, cut:, force:");
-  const Field f = item.child(key);
-  t.kind = key == "grab"    ? ToolAction::Kind::grab
-           : key == "probe" ? ToolAction::Kind::probe
-           : key == "cut"   ? ToolAction::Kind::cut
-                            : ToolAction::Kind::force;
+  const YamlField f = item.child(key);
+  t.kind = key == "grab"    ? ToolKind::grab
+           : key == "probe" ? ToolKind::probe
+           : key == "cut"   ? ToolKind::cut
+                            : ToolKind::force;
   t.label = item.path() + " (" + key + ")";
-  if (t.kind == ToolAction::Kind::cut) {
+  if (t.kind == ToolKind::cut) {
     f.only({"start_s", "end_s", "path", "blade_edge_mm", "snap_to_tissue"});
     t.blade_edge_mm = f.child("blade_edge_mm").vec3();
     if (t.blade_edge_mm == std::array<double, 3>{0, 0, 0}) f.child("blade_edge_mm").fail("the blade edge must not be zero");
-  } else if (t.kind == ToolAction::Kind::force) {
+  } else if (t.kind == ToolKind::force) {
     f.only({"start_s", "end_s", "path", "radius_mm", "force_n", "snap_to_tissue"});
     t.radius_mm = f.child("radius_mm").positive();
     t.force_n = f.child("force_n").vec3();
@@ -199,11 +92,11 @@ ToolAction tool_of(const Field& item) {
   return t;
 }
 
-FixedRegionSpec fixed_of(const Field& item) {
+FixedRegionSpec fixed_of(const YamlField& item) {
   item.only({"box", "box_fraction", "half_space", "label"});
   FixedRegionSpec r;
   int given = 0;
-  const auto box_of = [&](const Field& b) {
+  const auto box_of = [&](const YamlField& b) {
     b.only({"min", "max"});
     Box box{b.child("min").vec3(), b.child("max").vec3()};
     for (int c = 0; c < 3; ++c) {
@@ -222,7 +115,7 @@ FixedRegionSpec fixed_of(const Field& item) {
     ++given;
   }
   if (item.has("half_space")) {
-    const Field h = item.child("half_space");
+    const YamlField h = item.child("half_space");
     h.only({"point_mm", "normal"});
     r.kind = FixedRegionSpec::Kind::half_space;
     r.half_space = {h.child("point_mm").vec3(), h.child("normal").vec3()};
@@ -243,25 +136,20 @@ FixedRegionSpec fixed_of(const Field& item) {
 const char* to_string(ModelKind kind) {
   return kind == ModelKind::spring_grid ? "spring_grid" : kind == ModelKind::fem ? "fem" : "explicit_springs";
 }
-const char* to_string(FemLaw law) { return law == FemLaw::linear ? "linear" : law == FemLaw::stvk ? "stvk" : "neo_hookean"; }
 
 std::string describe_scenario(const Scenario& s) {
   nlohmann::json j;
   j["name"] = s.name;
   j["model"] = to_string(s.model);
   if (s.model == ModelKind::fem) {
-    j["material_law"] = to_string(s.fem_law);
+    j["material_law"] = fem_material_model_name(s.material_law);
     j["solver"] = s.fem_solver == FemSolver::dynamic ? "dynamic" : "static";
   }
-  // The inputs the run reads: a grid unless the model is FEM (or explicit springs from a tet mesh),
-  // a tet mesh for FEM and tet-mesh springs, the surface when one is named.
   nlohmann::json inputs = nlohmann::json::object();
-  const bool grid_used = s.model == ModelKind::spring_grid || (s.model == ModelKind::explicit_springs && s.springs_from == SpringSource::grid);
-  if (grid_used || !s.grid.empty()) inputs["grid"] = s.grid.string();
-  if (s.model == ModelKind::fem || (s.model == ModelKind::explicit_springs && s.springs_from == SpringSource::tetmesh)) {
-    inputs["tetmesh"] = s.tetmesh.string();
-  }
-  if (!s.surface.empty()) inputs["surface"] = s.surface.string();
+  const ModelInputs read = model_inputs(s);
+  if (read.grid) inputs["grid"] = s.grid.string();
+  if (read.tetmesh) inputs["tetmesh"] = s.tetmesh.string();
+  if (read.surface) inputs["surface"] = s.surface.string();
   j["inputs"] = inputs;
   j["trajectory"] = s.trajectory.string();
   nlohmann::json render = nlohmann::json::array();
@@ -272,9 +160,6 @@ std::string describe_scenario(const Scenario& s) {
   j["render"] = render;
   return j.dump(2);
 }
-const char* to_string(ToolAction::Kind kind) {
-  return kind == ToolAction::Kind::grab ? "grab" : kind == ToolAction::Kind::probe ? "probe" : kind == ToolAction::Kind::cut ? "cut" : "force";
-}
 
 Scenario parse_scenario(const std::string& text, const fs::path& file, const fs::path& base_dir) {
   const std::string name = file.string();
@@ -284,7 +169,7 @@ Scenario parse_scenario(const std::string& text, const fs::path& file, const fs:
   } catch (const YAML::Exception& e) {
     throw InputError(name, "line " + std::to_string(e.mark.line + 1), "not valid YAML or JSON: " + e.msg);
   }
-  const Field top(doc, "", &name);
+  const YamlField top(doc, "", &name);
   if (!top.is_map()) top.fail("a scenario is a map of sections (name, model, material, time, output, ...)");
   top.only({"ctsurg_scenario", "name", "model", "material", "gravity_mm_per_s2", "fixed", "tools", "time", "output",
             "render", "backend", "threads"});
@@ -293,7 +178,7 @@ Scenario parse_scenario(const std::string& text, const fs::path& file, const fs:
   if (top.child("ctsurg_scenario").integer(1, 1000) != 1) top.child("ctsurg_scenario").fail("this ctsurg reads version 1");
   s.name = top.has("name") ? top.child("name").text() : file.stem().string();
 
-  const Field m = top.child("model");
+  const YamlField m = top.child("model");
   m.only({"kind", "grid", "surface", "tetmesh", "springs_from", "coupling", "mass_from_fraction", "material_law", "solver"});
   const std::string kind = m.child("kind").one_of({"spring_grid", "explicit_springs", "fem"});
   s.model = kind == "spring_grid" ? ModelKind::spring_grid : kind == "fem" ? ModelKind::fem : ModelKind::explicit_springs;
@@ -303,7 +188,7 @@ Scenario parse_scenario(const std::string& text, const fs::path& file, const fs:
   }
   if (m.has("material_law")) {
     const std::string law = m.child("material_law").one_of({"linear", "stvk", "neo_hookean"});
-    s.fem_law = law == "linear" ? FemLaw::linear : law == "stvk" ? FemLaw::stvk : FemLaw::neo_hookean;
+    s.material_law = law == "linear" ? FemMaterialModel::linear : law == "stvk" ? FemMaterialModel::stvk : FemMaterialModel::neo_hookean;
   }
   if (m.has("solver")) {
     s.fem_solver = m.child("solver").one_of({"dynamic", "static"}) == std::string("static") ? FemSolver::static_equilibrium
@@ -325,7 +210,7 @@ Scenario parse_scenario(const std::string& text, const fs::path& file, const fs:
   }
   if (m.has("mass_from_fraction")) s.mass_from_fraction = m.child("mass_from_fraction").boolean();
 
-  const Field mat = top.child("material");
+  const YamlField mat = top.child("material");
   mat.only({"preset", "youngs_modulus_pa", "poisson_ratio", "density_g_per_cm3", "damping_per_s"});
   s.material = mat.has("preset") ? material_preset(mat.child("preset").text(), name, mat.child("preset").path())
                                  : Material{"custom", 0, 0.45, 1.06e-3, "scenario"};
@@ -349,21 +234,21 @@ Scenario parse_scenario(const std::string& text, const fs::path& file, const fs:
       s.tools.push_back(tool_of(item));
       // FEM tools: grab (prescribed displacements) and probe (sphere contact, dynamic only); cutting
       // a tet mesh is not implemented (the spring models cut).
-      if (s.model == ModelKind::fem && s.tools.back().kind == ToolAction::Kind::cut) {
+      if (s.model == ModelKind::fem && s.tools.back().kind == ToolKind::cut) {
         item.fail("cut needs a spring model (kind: spring_grid or explicit_springs); the FEM models do not cut");
       }
       if (s.model == ModelKind::fem && s.fem_solver == FemSolver::static_equilibrium &&
-          s.tools.back().kind == ToolAction::Kind::probe) {
+          s.tools.back().kind == ToolKind::probe) {
         item.fail("probe needs solver: dynamic (contact is not part of the static solver)");
       }
     }
   }
 
-  const Field t = top.child("time");
+  const YamlField t = top.child("time");
   t.only({"duration_s", "dt_s", "safety_factor", "max_step_halvings"});
   s.duration_s = t.child("duration_s").positive();
   if (t.has("dt_s")) {
-    const Field dt = t.child("dt_s");
+    const YamlField dt = t.child("dt_s");
     if (dt.is_scalar() && dt.text() == "auto") {
       s.dt_s = 0;
     } else {
@@ -379,11 +264,11 @@ Scenario parse_scenario(const std::string& text, const fs::path& file, const fs:
   for (const auto& tool : s.tools) {
     if (tool.start_s >= s.duration_s) {
       throw InputError(name, tool.label + ".start_s", "the tool starts after the run ends (duration_s " +
-                                                          Field::num(s.duration_s) + ")");
+                                                          YamlField::num(s.duration_s) + ")");
     }
   }
 
-  const Field o = top.child("output");
+  const YamlField o = top.child("output");
   o.only({"trajectory", "frame_interval_s", "particles"});
   s.trajectory = resolve(base_dir, o.child("trajectory").text());
   s.frame_interval_s = o.has("frame_interval_s") ? o.child("frame_interval_s").positive() : s.duration_s / 50;

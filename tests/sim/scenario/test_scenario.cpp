@@ -91,13 +91,13 @@ TEST(Scenario, FullScenarioParsesEveryField) {
   EXPECT_EQ(s.fixed[1].half_space.point[2], 10);
   EXPECT_EQ(s.fixed[2].label, 2);
   ASSERT_EQ(s.tools.size(), 2u);
-  EXPECT_EQ(s.tools[0].kind, ctsurg::sim::ToolAction::Kind::grab);
+  EXPECT_EQ(s.tools[0].kind, ctsurg::sim::ToolKind::grab);
   EXPECT_EQ(s.tools[0].radius_mm, 5);
   EXPECT_EQ(s.tools[0].end_s, 0.5);
   EXPECT_TRUE(s.tools[0].snap_to_tissue);
   ASSERT_EQ(s.tools[0].path.size(), 2u);
   EXPECT_EQ(s.tools[0].path[1].point.kind, ctsurg::sim::PointSpec::Kind::offset_mm);
-  EXPECT_EQ(s.tools[1].kind, ctsurg::sim::ToolAction::Kind::cut);
+  EXPECT_EQ(s.tools[1].kind, ctsurg::sim::ToolKind::cut);
   EXPECT_EQ(s.tools[1].start_s, 0.2);  // defaults to the first keyframe
   EXPECT_TRUE(std::isinf(s.tools[1].end_s));
   EXPECT_EQ(s.tools[1].blade_edge_mm[2], 20);
@@ -169,7 +169,7 @@ TEST(Scenario, FemKindsAndTheirRules) {
       "material: {preset: kidney}\ntime: {duration_s: 1}\noutput: {trajectory: o.h5}\n";
   const auto s = parse_scenario(base, "f.yaml", "/b");
   EXPECT_EQ(s.model, ctsurg::sim::ModelKind::fem);
-  EXPECT_EQ(s.fem_law, ctsurg::sim::FemLaw::stvk);
+  EXPECT_EQ(s.material_law, ctsurg::sim::FemMaterialModel::stvk);
   EXPECT_EQ(s.fem_solver, ctsurg::sim::FemSolver::static_equilibrium);
   EXPECT_TRUE(s.grid.empty());  // no grid for an FEM scene
   const auto describe = ctsurg::sim::describe_scenario(s);

@@ -90,7 +90,7 @@ TEST(ScenarioGpu, WhatTheDeviceCannotRunIsRefused) {
   write_block(dir.path());
   auto s = parse_scenario(std::string(kScenario) + "backend: cuda\n", dir.path() / "s.yaml", dir.path());
   ToolAction force = s.tools[0];
-  force.kind = ToolAction::Kind::force;
+  force.kind = ToolKind::force;
   force.force_n = {0, 0, 0.01};
   force.label = "tools[3] (force)";
   s.tools.push_back(force);
@@ -100,4 +100,32 @@ TEST(ScenarioGpu, WhatTheDeviceCannotRunIsRefused) {
   } catch (const InputError& e) {
     EXPECT_EQ(e.field(), "tools[3] (force)");
   }
+}
+
+// An FEM scenario with a surface on the device (heart_fem_grab's shape: static Neo-Hookean, a grab, the
+// surface embedded in the tets): its frames come from the host, and match the CPU's (the device runs the
+// conjugate gradients only).
+TEST(ScenarioGpu, FemScenarioWithASurfaceMatchesTheCpu) {
+  if (!backend_available(Backend::cuda)) GTEST_SKIP() << "no CUDA device (or a build without CUDA)";
+  ctsurg::test::TempDir dir;
+  ctsurg::sim::test::write_block_files(dir.path(), 16, 4, 4, 2.0);
+  ctsurg::sim::test::write_bar_tet_mesh(dir.path());
+  const char* fem = R"(ctsurg_scenario: 1
+model: {kind: fem, tetmesh: tetmesh.h5, surface: surface.h5, material_law: neo_hookean, solver: static}
+material: {preset: liver}
+fixed: [{box_fraction: {min: [0, 0, 0], max: [0.05, 1, 1]}}]
+tools:
+  - grab: {radius_mm: 3, snap_to_tissue: true, path: [{t: 0, at_fraction: [1, 0.5, 0.5]}, {t: 0.1, offset_mm: [0, 0, 5]}]}
+time: {duration_s: 0.1}
+output: {trajectory: out.h5, frame_interval_s: 0.025}
+)";
+  auto s = parse_scenario(fem, dir.path() / "s.yaml", dir.path());
+  s.backend = "cpu";
+  const Trajectory c = run_scenario(s);
+  s.backend = "cuda";
+  const Trajectory g = run_scenario(s);
+  ASSERT_EQ(c.vertices.size(), g.vertices.size());
+  double worst = 0;
+  for (size_t i = 0; i < c.vertices.size(); ++i) worst = std::max(worst, std::abs(double(c.vertices[i]) - g.vertices[i]));
+  EXPECT_LT(worst, 1e-3);  // mm: both solve each frame to the same tolerance
 }

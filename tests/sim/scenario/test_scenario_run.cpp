@@ -14,6 +14,7 @@
 #include "ctsurg/mesh/marching_cubes.h"
 #include "ctsurg/sim/fem/fem_box_mesh.h"
 #include "ctsurg/sim/scenario/scenario.h"
+#include "fake_engine.h"
 #include "scenario_test_files.h"
 #include "sim_test_models.h"
 #include "test_support.h"
@@ -262,4 +263,114 @@ TEST(ScenarioRun, FemStaticAndDynamicAgreeAndTheGrabIsPrescribed) {
   double worst = 0;
   for (int64_t i = 0; i < 3 * a.vertex_count(); ++i) worst = std::max(worst, std::abs(double(last[i]) - lb[i]));
   EXPECT_LT(worst, 0.05);
+}
+
+// The loop itself, over an engine without physics (support/fake_engine.h).
+namespace {
+
+Scenario loop_scenario(const std::string& tools, const std::string& time) {
+  return parse_scenario("ctsurg_scenario: 1\nmodel: {kind: spring_grid, grid: unread.h5}\nmaterial: {preset: liver}\n" + tools +
+                            time + "output: {trajectory: out.h5, frame_interval_s: 0.05}\n",
+                        "loop.yaml", ".");
+}
+
+}  // namespace
+
+TEST(ScenarioRunLoop, RestartsFromTheLastFrameWithHalfTheStepUntilTheEngineIsStable) {
+  Scenario s = loop_scenario("", "time: {duration_s: 0.2, max_step_halvings: 3}\n");
+  auto fake = std::make_unique<ctsurg::sim::test::FakeEngine>(0.01);
+  fake->unstable_above_dt = 0.003;
+  fake->unstable_after_s = 0.09;  // frames 0 and 0.05 pass; the check at 0.1 fails until dt <= 0.003
+  RunReport report;
+  const Trajectory t = run_scenario(s, ScenarioEngine{std::move(fake), {}}, &report);
+  EXPECT_EQ(report.halvings, 2);
+  EXPECT_EQ(report.dt_s, 0.0025);
+  EXPECT_EQ(t.dt_s, 0.0025);
+  ASSERT_EQ(t.frame_count(), 5);
+  for (int64_t f = 0; f < 5; ++f) EXPECT_NEAR(t.time[static_cast<size_t>(f)], 0.05 * f, 1e-9);
+  // Restarted from the frame at 0.05 s each time (the engine's time is back there, the frames after
+  // it dropped), and the trajectory's dt column shows the step each frame was made with.
+  EXPECT_EQ(t.metric("dt")->values, (std::vector<double>{0.01, 0.01, 0.0025, 0.0025, 0.0025}));
+  ASSERT_EQ(report.notes.size(), 2u);
+  EXPECT_NE(report.notes[0].find("restarted from t = 0.050000 s with dt = 0.005000 s (fake: dt 0.010000 too large)"),
+            std::string::npos) << report.notes[0];
+
+  s.max_step_halvings = 1;
+  auto again = std::make_unique<ctsurg::sim::test::FakeEngine>(0.01);
+  again->unstable_above_dt = 0.003;
+  again->unstable_after_s = 0.09;
+  try {
+    (void)run_scenario(s, ScenarioEngine{std::move(again), {}});
+    ADD_FAILURE() << "a run unstable beyond its halvings completed";
+  } catch (const RuntimeError& e) {
+    EXPECT_NE(std::string(e.what()).find("loop.yaml: the run became unstable: fake: dt 0.005000 too large (after 1 step halvings)"),
+              std::string::npos) << e.what();
+  }
+}
+
+TEST(ScenarioRunLoop, AQuasiStaticEngineSolvesOncePerFrameAtTheFrameTimes) {
+  const Scenario s = loop_scenario(
+      "tools:\n  - grab: {radius_mm: 2, path: [{t: 0, position_mm: [100, 200, 300]}, {t: 0.2, position_mm: [100, 200, 304]}]}\n",
+      "time: {duration_s: 0.2}\n");
+  auto fake = std::make_unique<ctsurg::sim::test::FakeEngine>(0.0, true);
+  const auto calls = fake->calls;
+  RunReport report;
+  const Trajectory t = run_scenario(s, ScenarioEngine{std::move(fake), {}}, &report);
+  ASSERT_EQ(calls->size(), 4u);
+  for (size_t k = 0; k < 4; ++k) {
+    EXPECT_EQ((*calls)[k].what, "equilibrium");
+    EXPECT_NEAR((*calls)[k].time, 0.05 * static_cast<double>(k + 1), 1e-12);
+    ASSERT_EQ((*calls)[k].tools.size(), 1u);
+    EXPECT_NEAR((*calls)[k].tools[0].centre[2], (*calls)[k].time * 20, 1e-9);  // the tool at the frame's time (local frame)
+  }
+  EXPECT_EQ(t.frame_count(), 5);
+  EXPECT_EQ(report.steps, 4);
+}
+
+TEST(ScenarioRunLoop, StepsGoInBatchesOnlyWhileNoToolActs) {
+  const Scenario s = loop_scenario(
+      "tools:\n  - probe: {radius_mm: 2, start_s: 0.1, end_s: 0.15, path: [{t: 0, position_mm: [100, 200, 300]}]}\n",
+      "time: {duration_s: 0.25}\n");
+  auto fake = std::make_unique<ctsurg::sim::test::FakeEngine>(0.01);
+  fake->batches = true;
+  const auto calls = fake->calls;
+  const Trajectory t = run_scenario(s, ScenarioEngine{std::move(fake), {}});
+  EXPECT_EQ(t.frame_count(), 6);
+  // Up to 0.05 s and on to 0.1 s: idle, one call each; then single steps while the probe's window is
+  // open or ahead within the frame; after 0.15 s batches again.
+  std::vector<int> batch;
+  for (const auto& c : *calls) batch.push_back(c.steps);
+  EXPECT_EQ(batch.front(), 5);
+  EXPECT_EQ(batch.back(), 5);
+  int singles = 0;
+  for (const auto& c : *calls) {
+    if (c.steps == 1) {
+      ++singles;
+      EXPECT_GT(c.time, 0.05);
+      EXPECT_LT(c.time, 0.16);
+    }
+  }
+  EXPECT_GE(singles, 5);
+}
+
+// Without a surface the particles are the trajectory's point set, and its surface displacement is
+// theirs (it was once measured against the rest points in LPS, not in the run's frame: |origin|).
+TEST(ScenarioRun, WithoutASurfaceTheParticlesAreThePointSet) {
+  TempDir dir;
+  write_bar(dir.path(), 600);
+  const std::string tools =
+      "tools:\n  - grab:\n      radius_mm: 2.5\n      snap_to_tissue: true\n      path:\n        - {t: 0.0, at_fraction: [1, 0, 1]}\n"
+      "        - {t: 0.05, offset_mm: [0, -3, 2]}\n";
+  std::string text = bar_scenario(tools, "time:\n  duration_s: 0.05\n");
+  text.replace(text.find("  surface: surface.h5\n"), 22, "");
+  const auto s = parse_scenario(text, dir.path() / "s.yaml", dir.path());
+  ASSERT_TRUE(s.surface.empty());
+  RunReport report;
+  const Trajectory t = run_scenario(s, &report);
+  EXPECT_EQ(t.vertex_count(), report.particles);
+  EXPECT_TRUE(t.topologies[0].empty());
+  const auto& surface = t.metric("surface_max_displacement")->values;
+  EXPECT_EQ(surface, t.metric("max_displacement")->values);
+  EXPECT_EQ(surface.front(), 0.0);
+  EXPECT_NEAR(surface.back(), std::sqrt(13.0), 0.3);  // the grabbed end moved (0, -3, 2) mm
 }

@@ -9,6 +9,9 @@
 
 #include "ctsurg/sim/base/fixed_regions.h"
 #include "ctsurg/sim/base/material_presets.h"
+#include "ctsurg/sim/base/simulation_engine.h"
+#include "ctsurg/sim/fem/fem_engine.h"
+#include "ctsurg/sim/fem/fem_material.h"
 #include "ctsurg/sim/surface/surface_coupling.h"
 
 #include <array>
@@ -20,11 +23,11 @@
 namespace ctsurg::sim {
 
 enum class ModelKind { spring_grid, explicit_springs, fem };
-enum class FemLaw { linear, stvk, neo_hookean };  // fem: the material law (fem_material.h)
-enum class FemSolver { dynamic, static_equilibrium };  // fem: explicit dynamics or static Newton per frame
 enum class SpringSource { grid, tetmesh };  // where explicit springs come from
+// fem: the material law is a FemMaterialModel (fem/fem_material.h), the solver a FemSolver
+// (fem/fem_engine.h).
 
-// A point given in one of three ways; resolved to LPS mm when the run starts (tool_path.h).
+// A point given in one of three ways; resolved to the run's frame when it starts (tool_timeline.h).
 struct PointSpec {
   enum class Kind { position_mm, at_fraction, offset_mm };
   Kind kind = Kind::position_mm;
@@ -39,8 +42,7 @@ struct Keyframe {
 };
 
 struct ToolAction {
-  enum class Kind { grab, probe, cut, force };
-  Kind kind = Kind::grab;
+  ToolKind kind = ToolKind::grab;    // base/simulation_engine.h
   std::string label;                 // "tools[0] (grab)", for messages
   double start_s = 0;                // active from start_s ...
   double end_s = 0;                  // ... to end_s (grab: release), s; +inf = to the end of the run
@@ -78,11 +80,12 @@ struct Scenario {
   ModelKind model = ModelKind::spring_grid;
   SpringSource springs_from = SpringSource::grid;
   std::filesystem::path grid;       // occupancy grid file (ctsurg-grid); required except for kind: fem
+                                    // (which does not read it); scenario_model.h says what a model reads
   std::filesystem::path surface;    // surface file (ctsurg-surface/-normalmap) on that grid; optional
   std::filesystem::path tetmesh;    // tet mesh file (ctsurg-tetmesh): kind fem, or springs_from: tetmesh
   CouplingMode coupling = CouplingMode::trilinear;
-  FemLaw fem_law = FemLaw::neo_hookean;         // kind: fem
-  FemSolver fem_solver = FemSolver::dynamic;    // kind: fem
+  FemMaterialModel material_law = FemMaterialModel::neo_hookean;  // kind: fem
+  FemSolver fem_solver = FemSolver::dynamic;                       // kind: fem
   bool mass_from_fraction = false;
   Material material;                // preset, possibly with explicit overrides
   double damping_per_s = 0;         // mass-proportional damping rate alpha, 1/s (Verlet factor alpha dt)
@@ -107,12 +110,10 @@ Scenario parse_scenario(const std::string& text, const std::filesystem::path& fi
 Scenario read_scenario_file(const std::filesystem::path& path);
 
 // What the scenario reads and writes, as JSON for the pipeline (ctsurg-sim --describe): the model
-// kind, the input files it names (grid, surface, tetmesh: those it needs), the trajectory, and the
-// render requests.
+// kind, the input files it reads (grid, surface, tetmesh: model_inputs in scenario_model.h), the
+// trajectory, and the render requests.
 std::string describe_scenario(const Scenario& scenario);
 
 const char* to_string(ModelKind kind);
-const char* to_string(FemLaw law);
-const char* to_string(ToolAction::Kind kind);
 
 }  // namespace ctsurg::sim

@@ -1,24 +1,25 @@
-// Running a scenario (scenario.h): build the model from the named files, fix the fixed regions, step
-// with Verlet at the chosen step while the tool timeline grabs, probes and cuts, move and cut the
-// surface, watch stability, and collect the output frames as a Trajectory (core/trajectory_file.h).
+// Running a scenario (scenario.h): its model becomes a simulation engine (scenario_engine.h: spring
+// grid, explicit springs or tetrahedral FEM, on the CPU or a CUDA device), its tools a timeline
+// (tool_timeline.h), and one loop drives the engine to the end:
 //
-// Per step, in order: the spring forces and the Verlet update (spring_mass_step.h); then, at the new
-// time t, each active tool: grabbed particles set to the tool's centre + their offsets (captured at the
-// first step at or after start_s, released at end_s), probe spheres push particles out, and a blade
-// cuts every spring and surface triangle crossing the area it swept since the last step (its edge at
-// t - dt and at t; a blade that does not move cuts nothing). A frame is recorded at t = 0 and at every
-// multiple of frame_interval_s (the step's time nearest to it), and the stability guard checks each
-// frame and every 1,000 steps; an unstable run stops with a RuntimeError naming the time, the place and a
-// step to try, or, when the scenario allows max_step_halvings, restarts from the last frame with half
-// the step. A trajectory never holds a non-finite value.
+//   advance to the next event   one time step with the tools as they are at its end (several at once
+//                               while no tool acts, for an engine that batches them), or, for a
+//                               quasi-static engine, the equilibrium at the next output frame;
+//   check stability             at every frame and every 1,000 steps (and at every step where the
+//                               engine checks itself); an unstable run stops with a RuntimeError naming
+//                               the time, the place and a step to try, or, when the scenario allows
+//                               max_step_halvings and the engine can restart, goes back to the last
+//                               frame with half the step;
+//   record a frame              at t = 0 and at every multiple of frame_interval_s (the step's time
+//                               nearest to it) (trajectory_recorder.h: surface, topology, tools,
+//                               metrics). A trajectory never holds a non-finite value.
 //
-// Metrics per frame (units): kinetic_energy (nJ), elastic_energy (nJ), max_displacement (mm, over the
-// particles), surface_max_displacement (mm), enclosed_volume (mm^3, of the surface; after a cut, of
-// what remains, closed or not), springs_cut (count, cumulative), dt (s).
+// The engines document what happens within a step (springs/spring_engine.h, fem/fem_engine.h).
 #pragma once
 
 #include "ctsurg/core/trajectory_file.h"
 #include "ctsurg/sim/scenario/scenario.h"
+#include "ctsurg/sim/scenario/scenario_engine.h"
 
 #include <cstdint>
 #include <functional>
@@ -31,10 +32,10 @@ struct RunReport {
   int64_t particles = 0, fixed = 0;  // particles (spring models) or nodes (FEM); those held fixed
   int64_t springs = 0;               // spring models: springs present at the start
   int64_t elements = 0;              // FEM: tets
-  double critical_dt_s = 0;  // the per-particle critical step (stability.h)
+  double critical_dt_s = 0;  // the critical step (springs/stability.h, fem/fem_explicit_dynamics.h)
   double dt_s = 0;           // the step used at the end of the run
   int halvings = 0;          // step halvings after instability
-  int64_t steps = 0;                 // time steps (FEM static: Newton iterations)
+  int64_t steps = 0;                 // time steps (quasi-static FEM: Newton iterations)
   int64_t springs_cut = 0;
   int64_t surface_triangles_removed = 0;
   double wall_s = 0;         // seconds in the time loop
@@ -45,6 +46,13 @@ struct RunReport {
 // Throws InputError for a bad input file or a tool/region that selects nothing, RuntimeError when the
 // run is unstable beyond the allowed halvings.
 Trajectory run_scenario(const Scenario& scenario, RunReport* report = nullptr,
+                        const std::function<void(double)>& progress = {});
+// The same loop over an engine the caller made (make_scenario_engine, or any SimulationEngine that takes
+// this scenario's tools): the seam for models beyond the scenario's kinds. The scenario gives the tools,
+// the time and the output; of its model section only the label (scenario_model.h) and the surface file
+// (hashed into the trajectory when the engine has a surface) are used. report->notes holds what the
+// loop decided.
+Trajectory run_scenario(const Scenario& scenario, ScenarioEngine engine, RunReport* report = nullptr,
                         const std::function<void(double)>& progress = {});
 
 }  // namespace ctsurg::sim

@@ -14,6 +14,7 @@
 #pragma once
 
 #include "ctsurg/sim/base/particle_state.h"
+#include "ctsurg/sim/base/stability_report.h"
 #include "ctsurg/sim/springs/explicit_spring_model.h"
 #include "ctsurg/sim/springs/spring_grid_model.h"
 
@@ -55,14 +56,6 @@ struct StabilityGuardOptions {
   double energy_floor = 1e-6;    // nJ; growth from below this is not counted (a body at rest)
   double gravity = 0;            // mm/s^2, |g| of the run: a piece cut free falls, and by time t it may
                                  // move g t dt per step without being unstable; the step limit grows by that
-};
-
-struct StabilityReport {
-  bool stable = true;
-  double time = 0;            // s, of the check
-  int32_t particle = -1;      // the first offending particle (lowest id), or -1
-  std::string message;        // empty when stable: time, particle, its rest position, the cause,
-                              // and a suggested step
 };
 
 // Watches a run: non-finite positions, a particle moving more than max_step_mm in a step, and

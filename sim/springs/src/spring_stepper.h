@@ -1,8 +1,8 @@
-// Where a spring scenario's state is stepped (internal to scenario_run.cpp): on the host with the
-// CPU kernels, or on a CUDA device (DeviceSimulation, device_simulation.h) with the same kernels.
-// The run keeps the model and a ParticleState on the host either way; the device engine copies the
-// state back when the run needs it there (output frames, stability checks, surface cuts) and copies
-// it up after the host changed it (a force tool).
+// Where a SpringEngine's state is stepped (spring_engine.h): on the host with the CPU kernels, or on a
+// CUDA device (DeviceSimulation, device_simulation.h) with the same kernels. The engine keeps the model
+// and a ParticleState on the host either way; the device stepper copies the state back when the engine
+// needs it there (output frames, stability checks, surface cuts) and copies it up after the host
+// changed it.
 #pragma once
 
 #include "ctsurg/sim/base/particle_state.h"
@@ -10,6 +10,7 @@
 #include "ctsurg/sim/springs/explicit_spring_model.h"
 #include "ctsurg/sim/springs/sphere_tools.h"
 #include "ctsurg/sim/springs/spring_cutting.h"
+#include "ctsurg/sim/springs/spring_engine.h"
 #include "ctsurg/sim/springs/spring_grid_model.h"
 #include "ctsurg/sim/springs/spring_mass_step.h"
 
@@ -17,13 +18,11 @@
 #include <memory>
 #include <variant>
 
-namespace ctsurg::sim::detail {
+namespace ctsurg::sim {
 
-using SpringModel = std::variant<SpringGridModel, ExplicitSpringModel>;
-
-class SpringEngine {
+class SpringStepper {
  public:
-  virtual ~SpringEngine() = default;
+  virtual ~SpringStepper() = default;
   virtual void step(const StepParameters& parameters) = 0;
   // Captures the particles inside the sphere (a grab when `hold`, or the particles a force acts on);
   // a held grab's handle goes to *handle for apply_grab and release_grab.
@@ -38,9 +37,9 @@ class SpringEngine {
   virtual bool on_device() const = 0;
 };
 
-class HostSpringEngine final : public SpringEngine {
+class HostSpringStepper final : public SpringStepper {
  public:
-  HostSpringEngine(SpringModel& model, ParticleState& state, int threads) : model_(model), state_(state), threads_(threads) {}
+  HostSpringStepper(SpringModel& model, ParticleState& state, int threads) : model_(model), state_(state), threads_(threads) {}
   void step(const StepParameters& p) override {
     std::visit([&](const auto& m) { sim::step(m, state_, p, Backend::cpu); }, model_);
   }
@@ -65,9 +64,9 @@ class HostSpringEngine final : public SpringEngine {
 
 // Grabs are held on the device (DeviceSimulation's handles) and placed after every step there.
 // Unverified on a GPU in this repository's CI (docs/gpu.md).
-class DeviceSpringEngine final : public SpringEngine {
+class DeviceSpringStepper final : public SpringStepper {
  public:
-  DeviceSpringEngine(SpringModel& model, ParticleState& state) : model_(model), state_(state) {
+  DeviceSpringStepper(SpringModel& model, ParticleState& state) : model_(model), state_(state) {
     std::visit([&](const auto& m) { gpu_.upload(m, state_); }, model_);
   }
   void step(const StepParameters& p) override { gpu_.step(1, p); }
@@ -95,4 +94,4 @@ class DeviceSpringEngine final : public SpringEngine {
   DeviceSimulation gpu_;
 };
 
-}  // namespace ctsurg::sim::detail
+}  // namespace ctsurg::sim

@@ -1,0 +1,125 @@
+// A simulation engine: one model's state and how it moves while tools act on it, whatever the model
+// (spring-mass on the voxel grid or on explicit springs: springs/spring_engine.h; tetrahedral FEM,
+// dynamic or quasi-static: fem/fem_engine.h) and wherever its state lives (the Backend it was built
+// with: the CPU, or a CUDA device). The scenario runner (scenario/scenario_run.h) drives an engine
+// along a scenario's tool timeline; anything else that produces tool positions over time (a live
+// session driven by a user's input) drives the same engines the same way.
+//
+// Tools. A time step (step()) or a quasi-static frame (equilibrium()) takes the tools as they are at
+// its end, as one ToolInput per tool in a fixed order: the index names the tool to the engine, which
+// keeps what the tool holds. A grab captures what is inside its sphere when it first becomes active
+// and moves it with its centre until it stops being active (then it lets go, for good); a probe pushes
+// the model out of its sphere while active; a force spreads its total force over what is inside its
+// sphere when it starts, until it ends; a blade cuts what its edge crossed along the straight
+// segments its centre swept since its last sweep (the caller decides when a blade sweeps:
+// blade_sweep_mm()).
+//
+// Frame. Every position an engine takes or gives is in its local frame: LPS minus origin(), in mm (a
+// whole-millimetre point near the model, so that float positions keep their resolution far from the
+// CT's origin: a heart at z = 650 mm would otherwise move in steps of 6e-5 mm).
+//
+// Stability. A dynamic engine may find a step unstable (step() says so); check_stability() runs its
+// periodic test (the caller decides how often). An engine that can_restart() goes back to its last
+// save_checkpoint() with half the step on restart_halved().
+//
+// Units: mm, s, g (base/particle_state.h): forces uN, energies nJ.
+#pragma once
+
+#include "ctsurg/sim/base/real.h"
+#include "ctsurg/sim/base/stability_report.h"
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace ctsurg::sim {
+
+using Vec3 = std::array<double, 3>;
+
+enum class ToolKind { grab, probe, cut, force };
+const char* to_string(ToolKind kind);
+
+// One tool at the end of a step (or at a quasi-static frame's time).
+struct ToolInput {
+  ToolKind kind = ToolKind::grab;
+  std::string label;                   // names the tool in messages, e.g. "tools[0] (grab)"
+  double radius_mm = 0;                // grab, probe, force: the sphere's radius, mm
+  Vec3 force_n{0, 0, 0};               // force: the total force, N (LPS)
+  Vec3 blade_edge_mm{0, 0, 0};         // cut: the blade's edge, centred on its path, mm
+  bool active = false;                 // inside its time window
+  Vec3 centre{0, 0, 0};                // mm, local frame
+  double start_s = 0;                  // when its window opens, s, and where it is then (mm): a
+  Vec3 start_centre{0, 0, 0};          //   quasi-static engine captures there
+  std::vector<std::array<Vec3, 2>> sweeps;  // cut: straight segments (from, to) its centre swept
+                                            //   since its last sweep, in order; empty: no cut now
+};
+
+// What the model is, for reports.
+struct EngineCounts {
+  int64_t nodes = 0;          // particles (spring models) or nodes (FEM)
+  int64_t fixed = 0;          // of them, held fixed
+  int64_t springs = 0;        // spring models: springs present at the start
+  int64_t elements = 0;       // FEM: tets
+  double critical_dt_s = 0;   // the critical time step (dynamic engines), s
+};
+
+// The state's measures at a frame (after sync()).
+struct EngineMetrics {
+  double kinetic_energy = 0;     // nJ
+  double elastic_energy = 0;     // nJ
+  double max_displacement = 0;   // mm, over the nodes
+  int64_t springs_cut = 0;       // cumulative
+  int64_t triangles_removed = 0; // surface triangles the blade removed, cumulative
+  std::vector<double> extra;     // the values of extra_metrics(), in its order
+};
+
+class SimulationEngine {
+ public:
+  virtual ~SimulationEngine() = default;
+
+  // The model.
+  virtual EngineCounts counts() const = 0;
+  virtual const Vec3& origin() const = 0;                         // LPS mm of the local frame's origin
+  virtual const std::vector<double>& rest_positions() const = 0;  // #P x 3 mm, local (the model's own values)
+  virtual bool has_surface() const = 0;
+  // Metrics beyond EngineMetrics' fixed ones: (name, units), e.g. a static solver's iterations.
+  virtual std::vector<std::pair<std::string, std::string>> extra_metrics() const { return {}; }
+  // How far a blade's centre moves before it cuts (mm): sweeping shorter than the model's finest spacing
+  // costs a pass over the model for nothing. 0 when this engine does not cut.
+  virtual double blade_sweep_mm() const = 0;
+
+  // Time.
+  virtual bool quasi_static() const = 0;  // each frame an equilibrium (equilibrium()), no time steps
+  virtual double dt() const = 0;          // s, the step now (0 when quasi-static)
+  virtual double time() const = 0;        // s
+  virtual int64_t steps() const = 0;      // steps taken (quasi-static: Newton iterations)
+  // Whether step(tools, n) with n > 1 saves work (the caller passes n > 1 only while no tool acts).
+  virtual bool batches_steps() const { return false; }
+  // Dynamic engines: advances `steps` steps of dt() with the tools as `tools` says (at time() + dt()).
+  // Returns unstable (and keeps the state before the failing step) when a per-step guard fired.
+  virtual StabilityReport step(const std::vector<ToolInput>& tools, int steps) = 0;
+  // Quasi-static engines: the equilibrium at `time` (s) under the tools as `tools` says then.
+  virtual void equilibrium(const std::vector<ToolInput>& tools, double time) = 0;
+
+  // Output, from the host's copy of the state: sync() first (a device engine copies it back).
+  virtual void sync() = 0;
+  virtual void positions(std::vector<double>& xyz) const = 0;   // #P x 3 mm, local
+  // The surface's vertices (#V x 3 mm, local), or the nodes' positions when there is no surface.
+  virtual void surface_vertices(std::vector<float>& xyz) = 0;
+  virtual const std::vector<uint32_t>& triangles() const = 0;  // the surface now (#F x 3); empty: none
+  virtual const std::vector<Real>& surface_rest_vertices() const = 0;  // #V x 3 mm, local; empty: none
+  virtual EngineMetrics metrics() const = 0;
+  // Whether tool `tool` (an index into the tool list) holds something: a grab its capture, a force
+  // the nodes it loads.
+  virtual bool engaged(size_t tool) const = 0;
+
+  // Stability and restarts.
+  virtual StabilityReport check_stability() = 0;
+  virtual bool can_restart() const = 0;
+  virtual void save_checkpoint() = 0;
+  virtual void restart_halved() = 0;  // the last checkpoint, with half the step
+};
+
+}  // namespace ctsurg::sim

@@ -1,0 +1,127 @@
+// The tetrahedral FEM as a simulation engine (base/simulation_engine.h): one model, its fixed nodes,
+// the tools (fem_tools.h: grabs as prescribed displacements, point forces; probes as sphere contact),
+// gravity, and the surface embedded in the tets, advanced in one of two ways:
+//
+//   dynamic  explicit central differences (fem_explicit_dynamics.h); the tools are set before every
+//            step (at its end time), and steps go in one call while no tool acts (on cuda: one launch
+//            sequence and one wait instead of one per step). Its guard checks every step: step()
+//            returns unstable, with the state before the failing step, when it fires.
+//   static   a quasi-static sequence: each frame the equilibrium under that frame's grabs, forces and
+//            gravity; the linear material by the factorised, condensed solver (fem_linear_static_solver.h:
+//            one factorisation for the run), the nonlinear laws by Newton with conjugate gradients
+//            (fem_static_solver.h), warm-started from the previous frame.
+//
+// Backend::cuda runs the explicit dynamics and the static solver's conjugate gradients on the device;
+// the linear solver's factorisation stays on the CPU. Probes need the dynamic solver (contact is not
+// part of the static one); the FEM models do not cut. Restarts with a halved step are not offered.
+//
+// Metrics beyond the engine's common ones: newton_iterations and cg_iterations of the last static
+// solve (0 for the dynamic solver).
+//
+// Units: mm (local frame: LPS minus origin), s, g; forces uN, energies nJ.
+#pragma once
+
+#include "ctsurg/sim/base/backend.h"
+#include "ctsurg/sim/base/particle_state.h"
+#include "ctsurg/sim/base/simulation_engine.h"
+#include "ctsurg/sim/fem/fem_explicit_dynamics.h"
+#include "ctsurg/sim/fem/fem_linear_static_solver.h"
+#include "ctsurg/sim/fem/fem_model.h"
+#include "ctsurg/sim/fem/fem_static_solver.h"
+#include "ctsurg/sim/fem/fem_tools.h"
+#include "ctsurg/sim/surface/embedded_surface.h"
+
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace ctsurg::sim {
+
+enum class FemSolver { dynamic, static_equilibrium };  // explicit dynamics, or static Newton per frame
+
+struct FemEngineOptions {
+  FemSolver solver = FemSolver::dynamic;
+  double dt = 0;                           // dynamic: s; 0 = safety_factor x the critical step
+  double safety_factor = 0.5;              // dynamic
+  double mass_damping = 0;                 // dynamic: Rayleigh mass damping, 1/s
+  std::array<double, 3> gravity{0, 0, 0};  // mm/s^2, LPS
+  int threads = 0;                         // CPU threads, 0 = automatic
+  std::string where = "fem engine";        // names the run in messages (a scenario file)
+  std::function<void(const std::string&)> note;  // what the engine decides (captures, the factorisation)
+};
+
+class FemEngine final : public SimulationEngine {
+ public:
+  // model (local frame, origin `origin` LPS mm), the nodes held fixed, the surface it carries (may be
+  // empty; its coupling names nodes). Throws InputError("fem engine", "fixed", ...) for a static solver
+  // without fixed nodes (the stiffness is singular), and as FemExplicitDynamics and
+  // FemLinearStaticSolver for options or a backend they refuse.
+  FemEngine(FemModel model, std::vector<int32_t> fixed_nodes, EmbeddedSurface surface, const Vec3& origin,
+            const FemEngineOptions& options, Backend backend = Backend::cpu);
+  ~FemEngine() override;
+  // Not copied or moved: the state lives where its solvers point.
+  FemEngine(const FemEngine&) = delete;
+  FemEngine& operator=(const FemEngine&) = delete;
+
+  const FemModel& model() const { return model_; }
+  const std::vector<double>& displacements() const { return u_; }  // #N x 3 mm, current after sync()
+
+  EngineCounts counts() const override { return counts_; }
+  const Vec3& origin() const override { return origin_; }
+  const std::vector<double>& rest_positions() const override { return model_.nodes; }
+  bool has_surface() const override { return !surface_.empty(); }
+  std::vector<std::pair<std::string, std::string>> extra_metrics() const override;
+  double blade_sweep_mm() const override { return 0; }
+
+  bool quasi_static() const override { return options_.solver == FemSolver::static_equilibrium; }
+  double dt() const override;
+  double time() const override;
+  int64_t steps() const override { return steps_; }
+  bool batches_steps() const override { return true; }
+  StabilityReport step(const std::vector<ToolInput>& tools, int steps) override;
+  void equilibrium(const std::vector<ToolInput>& tools, double time) override;
+
+  void sync() override;
+  void positions(std::vector<double>& xyz) const override;
+  void surface_vertices(std::vector<float>& xyz) override;
+  const std::vector<uint32_t>& triangles() const override { return surface_.triangles(); }
+  const std::vector<Real>& surface_rest_vertices() const override { return surface_.rest_vertices(); }
+  EngineMetrics metrics() const override;
+  bool engaged(size_t tool) const override { return holds_.engaged(tool); }
+
+  StabilityReport check_stability() override { return {}; }  // the dynamics check every step
+  bool can_restart() const override { return false; }
+  void save_checkpoint() override;
+  void restart_halved() override;
+
+ private:
+  void check_tools(const std::vector<ToolInput>& tools) const;
+
+  FemModel model_;
+  std::vector<int32_t> fixed_nodes_;
+  EmbeddedSurface surface_;
+  Vec3 origin_;
+  FemEngineOptions options_;
+  Backend backend_;
+  EngineCounts counts_;
+  FemToolHolds holds_;
+  std::vector<double> u_;           // #N x 3 mm
+  std::vector<Real> rest_real_;     // #N x 3 mm, the rest positions as the surface kernel reads them
+  ParticleState positions_;         // rest + u, for the surface
+  // dynamic
+  std::optional<FemExplicitDynamics> dynamics_;
+  bool had_grab_ = false;
+  // static
+  std::unique_ptr<FemLinearStaticSolver> linear_;
+  FemBoundaryConditions bc_;
+  FemStaticOptions static_options_;
+  double static_time_ = 0;
+  int solves_ = 0, newton_ = 0, cg_ = 0;
+  int64_t steps_ = 0;
+  std::vector<int32_t> grab_nodes_;  // scratch
+  std::vector<double> grab_displacements_;
+};
+
+}  // namespace ctsurg::sim

@@ -1,0 +1,72 @@
+// The tools of a tetrahedral FEM model (fem_engine.h), on its nodes:
+//
+//   grab   captures the free nodes inside its sphere once, when it first becomes active, with their
+//          displacement then; afterwards they are held (prescribed displacements: the static solver's
+//          FemBoundaryConditions, the explicit dynamics' set_prescribed) at that displacement plus the
+//          tool's travel since the capture, until it stops being active. A node two grabs hold follows
+//          the later one in tool order.
+//   force  a total force (N) shared equally by the free nodes inside its sphere when it starts, as
+//          nodal forces (uN) until it ends (the FEM paper's point load, Huang et al. section 5).
+//
+// A quasi-static engine captures where the tool was when its window opened (ToolInput::start_centre,
+// start_s); a dynamic one where it is at the step it first is active. Both take the displacement the
+// caller passes as the nodes' current one.
+//
+// Units: mm (the model's frame), forces uN (= g mm/s^2), arrays #N x 3 row-major.
+#pragma once
+
+#include "ctsurg/sim/base/simulation_engine.h"
+#include "ctsurg/sim/fem/fem_model.h"
+
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+namespace ctsurg::sim {
+
+// The free nodes (increasing ids) whose current position rest + u lies strictly inside the sphere
+// (centre mm, radius mm). fixed: #N flags (1 = fixed, never selected); u: #N x 3 mm.
+std::vector<int32_t> free_nodes_in_sphere(const FemModel& model, const std::vector<double>& u,
+                                          const std::vector<uint8_t>& fixed, const Vec3& centre, double radius);
+
+// What the tools hold, by tool index. `where` names the run in messages (InputError(where, tool
+// label, ...) when a tool captures nothing); `note` receives what was captured (may be empty).
+class FemToolHolds {
+ public:
+  FemToolHolds(const FemModel& model, std::vector<uint8_t> fixed, std::string where,
+               std::function<void(const std::string&)> note = {});
+
+  // The grabs at time t (s) from the grab entries of `tools`: captures (at `t`, or at each tool's
+  // start when capture_at_start) and releases, then writes the held nodes (in tool order, each node
+  // once) and their displacements (#G x 3 mm). u: the nodes' displacement now (#N x 3 mm).
+  void update_grabs(const std::vector<ToolInput>& tools, double t, const std::vector<double>& u, bool capture_at_start,
+                    std::vector<int32_t>& nodes, std::vector<double>& displacements);
+  // The forces from the force entries of `tools`: captures and releases as the grabs.
+  // Returns whether the nodal forces changed (a force started or ended).
+  bool update_forces(const std::vector<ToolInput>& tools, const std::vector<double>& u, bool capture_at_start);
+  // The external nodal forces of the active forces (#N x 3 uN), or empty when none acts.
+  const std::vector<double>& nodal_forces() const { return nodal_forces_; }
+  // Whether tool `tool` holds nodes (a grab its capture, a force the nodes it loads).
+  bool engaged(size_t tool) const;
+
+ private:
+  struct Hold {
+    std::vector<int32_t> nodes;     // captured (increasing); empty before the capture and after release
+    std::vector<double> captured_u; // #nodes x 3 mm: their displacement at the capture
+    Vec3 captured_at{0, 0, 0};      // the tool's centre at the capture
+    bool released = false;
+  };
+  Hold& hold(size_t tool);
+  std::vector<int32_t> capture(const ToolInput& tool, const Vec3& centre, const std::vector<double>& u) const;
+
+  const FemModel& model_;
+  std::vector<uint8_t> fixed_;
+  std::string where_;
+  std::function<void(const std::string&)> note_;
+  std::vector<Hold> holds_;
+  std::vector<double> nodal_forces_;
+  std::vector<int64_t> last_;  // scratch: the last grab entry per node
+};
+
+}  // namespace ctsurg::sim

@@ -1,0 +1,196 @@
+#include "ctsurg/sim/fem/fem_engine.h"
+
+#include "ctsurg/core/error.h"
+#include "ctsurg/sim/fem/fem_forces.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <utility>
+
+namespace ctsurg::sim {
+namespace {
+
+std::vector<uint8_t> fixed_flags(int32_t nodes, const std::vector<int32_t>& fixed) {
+  std::vector<uint8_t> flags(static_cast<size_t>(nodes), 0);
+  for (const int32_t n : fixed) {
+    if (n < 0 || n >= nodes) throw InputError("fem engine", "fixed", "node " + std::to_string(n) + " out of range");
+    flags[static_cast<size_t>(n)] = 1;
+  }
+  return flags;
+}
+
+}  // namespace
+
+FemEngine::FemEngine(FemModel model, std::vector<int32_t> fixed_nodes, EmbeddedSurface surface, const Vec3& origin,
+                     const FemEngineOptions& options, Backend backend)
+    : model_(std::move(model)),
+      fixed_nodes_(std::move(fixed_nodes)),
+      surface_(std::move(surface)),
+      origin_(origin),
+      options_(options),
+      backend_(backend),
+      holds_(model_, fixed_flags(model_.node_count(), fixed_nodes_), options_.where, options_.note),
+      u_(model_.nodes.size(), 0.0),
+      rest_real_(model_.nodes.begin(), model_.nodes.end()),
+      positions_(rest_real_, std::vector<Real>(static_cast<size_t>(model_.node_count()), Real(1))) {
+  counts_.nodes = model_.node_count();
+  counts_.elements = model_.tet_count();
+  counts_.fixed = static_cast<int64_t>(fixed_nodes_.size());
+  if (options_.solver == FemSolver::dynamic) {
+    FemDynamicsOptions o;
+    o.dt = options_.dt;
+    o.safety_factor = options_.safety_factor;
+    o.mass_damping = options_.mass_damping;
+    o.gravity = options_.gravity;
+    o.threads = options_.threads;
+    counts_.critical_dt_s = fem_critical_time_step(model_, options_.safety_factor).critical;
+    dynamics_.emplace(model_, o, backend_);
+    dynamics_->set_fixed_nodes(fixed_nodes_);
+    return;
+  }
+  // Quasi-static. The linear material factorises its constant stiffness once; the nonlinear laws run
+  // Newton with conjugate gradients per frame.
+  if (fixed_nodes_.empty()) {
+    throw InputError(options_.where, "fixed", "a static FEM problem needs fixed nodes (the system is singular otherwise)");
+  }
+  bc_.fixed_nodes = fixed_nodes_;
+  static_options_.threads = options_.threads;
+  static_options_.load_steps = 1;
+  if (model_.material.model == FemMaterialModel::linear) {
+    FemLinearSolverOptions lo;
+    lo.threads = options_.threads;
+    linear_ = std::make_unique<FemLinearStaticSolver>(model_, bc_, lo);
+    if (options_.note) {
+      options_.note("FEM linear static: stiffness factorised once (" + std::to_string(linear_->stats().factor_nonzeros) +
+                    " non-zeros, " + std::to_string(linear_->stats().factor_seconds) + " s); each frame a condensed solve");
+    }
+  }
+}
+
+FemEngine::~FemEngine() = default;
+
+std::vector<std::pair<std::string, std::string>> FemEngine::extra_metrics() const {
+  return {{"newton_iterations", "1"}, {"cg_iterations", "1"}};
+}
+
+double FemEngine::dt() const { return dynamics_ ? dynamics_->dt() : 0.0; }
+double FemEngine::time() const { return dynamics_ ? dynamics_->time() : static_time_; }
+
+void FemEngine::check_tools(const std::vector<ToolInput>& tools) const {
+  for (const ToolInput& tool : tools) {
+    if (tool.kind == ToolKind::cut) throw InputError(options_.where, tool.label, "the FEM models do not cut; use a spring model");
+    if (tool.kind == ToolKind::probe && !dynamics_) {
+      throw InputError(options_.where, tool.label, "probe needs solver: dynamic (contact is not part of the static solver)");
+    }
+  }
+}
+
+StabilityReport FemEngine::step(const std::vector<ToolInput>& tools, int steps) {
+  if (!dynamics_) throw RuntimeError(options_.where + ": the static FEM solver has no time steps (it solves each frame)");
+  check_tools(tools);
+  const double t_next = dynamics_->time() + dynamics_->dt();
+  holds_.update_grabs(tools, t_next, u_, false, grab_nodes_, grab_displacements_);
+  if (!grab_nodes_.empty()) {
+    dynamics_->set_prescribed(grab_nodes_, grab_displacements_);
+    had_grab_ = true;
+  } else if (had_grab_) {
+    dynamics_->clear_prescribed();
+    had_grab_ = false;
+  }
+  // One probe at a time is supported by the dynamics' contact sphere: the first active one.
+  std::array<double, 3> centre{0, 0, 0};
+  double radius = 0;
+  for (const ToolInput& tool : tools) {
+    if (tool.kind == ToolKind::probe && tool.active) {
+      centre = tool.centre;
+      radius = tool.radius_mm;
+      break;
+    }
+  }
+  dynamics_->set_contact_sphere(centre, radius);
+  if (holds_.update_forces(tools, u_, false)) dynamics_->set_external_forces(holds_.nodal_forces());
+  try {
+    dynamics_->step(steps);
+  } catch (const RuntimeError& e) {
+    StabilityReport r;
+    r.stable = false;
+    r.time = dynamics_->time();
+    r.message = e.what();
+    return r;
+  }
+  steps_ += steps;
+  return {};
+}
+
+void FemEngine::equilibrium(const std::vector<ToolInput>& tools, double time) {
+  if (dynamics_) throw RuntimeError(options_.where + ": the dynamic FEM solver steps in time (it has no equilibrium solve)");
+  check_tools(tools);
+  holds_.update_grabs(tools, time, u_, true, grab_nodes_, grab_displacements_);
+  holds_.update_forces(tools, u_, true);
+  FemLoads loads;
+  loads.gravity = options_.gravity;
+  loads.forces = holds_.nodal_forces();
+  FemStaticResult r;
+  if (linear_) {
+    r = linear_->solve(grab_nodes_, grab_displacements_, loads);
+  } else {
+    bc_.prescribed_nodes = grab_nodes_;
+    bc_.prescribed_displacements = grab_displacements_;
+    if (solves_ > 0) static_options_.initial_displacements = u_;  // warm start from the previous frame
+    r = solve_fem_static(model_, bc_, loads, static_options_, backend_);
+  }
+  if (!r.report.converged) {
+    throw RuntimeError(options_.where + ": the static FEM solve at t = " + std::to_string(time) +
+                       " s did not converge: relative residual " + std::to_string(r.report.relative_residual) + " after " +
+                       std::to_string(r.report.newton_iterations) + " Newton iterations");
+  }
+  u_ = std::move(r.displacements);
+  newton_ = r.report.newton_iterations;
+  cg_ = std::accumulate(r.report.cg_iterations.begin(), r.report.cg_iterations.end(), 0);
+  steps_ += r.report.newton_iterations;
+  static_time_ = time;
+  ++solves_;
+}
+
+void FemEngine::sync() {
+  if (!dynamics_) return;
+  const auto d = dynamics_->displacements();
+  u_.assign(d.begin(), d.end());
+}
+
+void FemEngine::positions(std::vector<double>& xyz) const {
+  xyz.resize(u_.size());
+  for (size_t i = 0; i < u_.size(); ++i) xyz[i] = model_.nodes[i] + u_[i];
+}
+
+void FemEngine::surface_vertices(std::vector<float>& xyz) {
+  const std::vector<double>& rest = model_.nodes;
+  if (surface_.empty()) {
+    xyz.resize(u_.size());
+    for (size_t i = 0; i < xyz.size(); ++i) xyz[i] = static_cast<float>(rest[i] + u_[i]);
+    return;
+  }
+  for (size_t i = 0; i < static_cast<size_t>(model_.node_count()); ++i) {
+    positions_.x[i] = static_cast<Real>(rest[3 * i] + u_[3 * i]);
+    positions_.y[i] = static_cast<Real>(rest[3 * i + 1] + u_[3 * i + 1]);
+    positions_.z[i] = static_cast<Real>(rest[3 * i + 2] + u_[3 * i + 2]);
+  }
+  surface_.move(positions_, rest_real_, xyz, backend_, options_.threads);
+}
+
+EngineMetrics FemEngine::metrics() const {
+  EngineMetrics m;
+  m.kinetic_energy = dynamics_ ? dynamics_->kinetic_energy() : 0.0;
+  m.elastic_energy = dynamics_ ? dynamics_->strain_energy() : fem_strain_energy(model_, u_);
+  double max_u = 0;
+  for (size_t i = 0; i < u_.size(); i += 3) max_u = std::max(max_u, u_[i] * u_[i] + u_[i + 1] * u_[i + 1] + u_[i + 2] * u_[i + 2]);
+  m.max_displacement = std::sqrt(max_u);
+  m.extra = {static_cast<double>(newton_), static_cast<double>(cg_)};
+  return m;
+}
+
+void FemEngine::save_checkpoint() { throw RuntimeError(options_.where + ": the FEM engine does not restart with a halved step"); }
+void FemEngine::restart_halved() { throw RuntimeError(options_.where + ": the FEM engine does not restart with a halved step"); }
+
+}  // namespace ctsurg::sim

@@ -1,0 +1,67 @@
+// A scenario's tools over time: each tool's path resolved to the run's frame and its time window, and
+// from them the tools' inputs to a simulation engine (base/simulation_engine.h) at any time.
+//
+// Paths. Keyframes given as LPS positions, as fractions of the tissue's rest bounding box, or as offsets
+// from the first keyframe (scenario.h) become points of the run's local frame (LPS minus the engine's
+// origin); the tool moves linearly between keyframes and stays at the first before it and the last
+// after it. snap_to_tissue shifts the whole path so that its first point is on the nearest rest
+// particle (lowest id on ties).
+//
+// Windows. A tool is active from start_s to end_s: start_s - 1e-12 <= t < end_s (the tolerance keeps a
+// step that lands on start_s in floating point from missing it).
+//
+// Blades. A blade sweeps from where its last sweep ended once its centre has moved min_sweep_mm (the
+// engine's blade_sweep_mm(): a quarter of the shortest spring, so no spring slips between two sweeps),
+// or reaches a keyframe or its end: each sweep then lies on one straight segment of the path, a planar
+// quad the engine cuts as two triangles. The sweep state is the timeline's own: a copy of the timeline
+// is its checkpoint.
+//
+// Units: mm, s.
+#pragma once
+
+#include "ctsurg/sim/base/simulation_engine.h"
+#include "ctsurg/sim/scenario/scenario.h"
+
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace ctsurg::sim {
+
+class ToolTimeline {
+ public:
+  // tools: the scenario's; rest: the model's rest positions (#P x 3 mm, local frame: LPS minus
+  // `origin`); note receives what was decided (path snaps; may be empty).
+  ToolTimeline(const std::vector<ToolAction>& tools, const std::vector<double>& rest, const Vec3& origin,
+               const std::function<void(const std::string&)>& note = {});
+
+  size_t size() const { return tools_.size(); }
+  const ToolAction& tool(size_t i) const { return tools_[i].spec; }
+  Vec3 position(size_t i, double t) const;   // mm, local frame
+  bool active(size_t i, double t) const;
+  // Whether no tool acts (starts, moves or holds) in (t0, t1].
+  bool idle(double t0, double t1) const;
+
+  // The tools as an engine takes them for the interval (t0, t1]: one ToolInput per tool, in the
+  // scenario's order, with its window and centre at t1; blades with the sweeps since their last one
+  // (min_sweep_mm: the engine's blade_sweep_mm()). Advances the blades' sweep state.
+  void inputs(double t0, double t1, double min_sweep_mm, std::vector<ToolInput>& out);
+
+ private:
+  struct Path {
+    std::vector<double> t;  // s, increasing
+    std::vector<Vec3> p;    // mm
+    Vec3 at(double time) const;
+  };
+  struct Tool {
+    ToolAction spec;  // a copy: the timeline does not depend on the scenario living on
+    Path path;
+    std::optional<double> cut_from;  // a blade: the time its current sweep started
+  };
+  void sweeps(Tool& tool, double t0, double t1, double min_sweep_mm, std::vector<std::array<Vec3, 2>>& out) const;
+
+  std::vector<Tool> tools_;
+};
+
+}  // namespace ctsurg::sim

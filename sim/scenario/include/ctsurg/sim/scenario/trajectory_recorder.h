@@ -1,0 +1,51 @@
+// Collects a run's output frames into a Trajectory (core/trajectory_file.h): per frame the time, the
+// surface's vertices (or the nodes' when the scenario has no surface) and its topology when a cut
+// changed it, optionally every node's position, the tools (spheres: centre and radius, 0 when not
+// acting; blades: the edge's ends and whether it is active), and the metrics:
+//
+//   kinetic_energy (nJ), elastic_energy (nJ), max_displacement (mm, over the nodes),
+//   surface_max_displacement (mm, over the surface's vertices; the nodes' when there is none),
+//   enclosed_volume (mm^3) and surface_area (mm^2) of the surface (0 without one), springs_cut
+//   (cumulative), dt (s), then the engine's own (extra_metrics(): a static FEM's iterations).
+//
+// Positions go out in LPS: the engine's local frame plus its origin, added in double before rounding
+// to the file's float. truncate() drops the frames after a checkpoint when a run restarts.
+#pragma once
+
+#include "ctsurg/core/trajectory_file.h"
+#include "ctsurg/sim/base/simulation_engine.h"
+#include "ctsurg/sim/scenario/scenario.h"
+#include "ctsurg/sim/scenario/tool_timeline.h"
+
+#include <cstdint>
+#include <vector>
+
+namespace ctsurg::sim {
+
+class TrajectoryRecorder {
+ public:
+  // scenario: its name, surface file and output options; engine: the model (nodes, origin, surface);
+  // surface_lps_vertices: the surface file's vertices (#V x 3 LPS mm, the trajectory's rest surface),
+  // empty without a surface; frames: how many frames the run records. Throws InputError(scenario file,
+  // "output.frame_interval_s", ...) when the frames would not fit in memory.
+  TrajectoryRecorder(const Scenario& scenario, const SimulationEngine& engine, const ToolTimeline& timeline,
+                     std::vector<float> surface_lps_vertices, int64_t frames);
+
+  // Records the engine's state (after its sync()) as the frame at time t (s).
+  void record(SimulationEngine& engine, const ToolTimeline& timeline, double t);
+  size_t frames() const { return traj_.time.size(); }
+  void truncate(size_t frames);
+  // The trajectory (the recorder is spent); dt: the run's final step.
+  Trajectory finish(double dt);
+
+ private:
+  Trajectory traj_;
+  Vec3 origin_;
+  bool write_particles_;
+  size_t blades_ = 0;               // cut tools
+  std::vector<TrajectoryMetric> metrics_;
+  std::vector<float> vertices_;    // scratch: the frame's vertices, local frame
+  std::vector<double> positions_;  // scratch: the nodes' positions, local frame
+};
+
+}  // namespace ctsurg::sim

@@ -1,0 +1,218 @@
+#include "ctsurg/sim/scenario/scenario_engine.h"
+
+#include "ctsurg/core/error.h"
+#include "ctsurg/core/occupancy_grid_file.h"
+#include "ctsurg/core/surface_mesh_file.h"
+#include "ctsurg/core/tet_mesh_file.h"
+#include "ctsurg/sim/base/backend.h"
+#include "ctsurg/sim/base/fixed_regions.h"
+#include "ctsurg/sim/fem/fem_engine.h"
+#include "ctsurg/sim/fem/fem_explicit_dynamics.h"
+#include "ctsurg/sim/springs/spring_calibration.h"
+#include "ctsurg/sim/springs/spring_engine.h"
+#include "ctsurg/sim/surface/embedded_surface.h"
+#include "ctsurg/sim/surface/tet_embedding.h"
+#include "rest_bounds.h"
+
+#include <cmath>
+#include <optional>
+#include <set>
+
+namespace ctsurg::sim {
+namespace {
+
+// The run's local origin: the whole-millimetre point nearest `centre` (LPS mm).
+Vec3 local_origin(const Vec3& centre) { return {std::round(centre[0]), std::round(centre[1]), std::round(centre[2])}; }
+
+// The union (increasing ids) of the scenario's fixed regions over the rest positions `rest` (#P x 3,
+// local frame: LPS minus `origin`); `bounds`: the box that box_fraction refers to; `by_label` selects a
+// label's particles. InputError naming "fixed[r]" when a region selects nothing.
+std::vector<int32_t> fixed_particles(const Scenario& s, const std::vector<Real>& rest, const RestBounds& bounds,
+                                     const Vec3& origin, const std::function<std::vector<int32_t>(uint16_t)>& by_label) {
+  std::set<int32_t> fixed;
+  for (size_t r = 0; r < s.fixed.size(); ++r) {
+    const auto& f = s.fixed[r];
+    std::vector<int32_t> ids;
+    switch (f.kind) {
+      case FixedRegionSpec::Kind::box: {
+        Box local = f.box;
+        for (size_t c = 0; c < 3; ++c) local.min[c] -= origin[c], local.max[c] -= origin[c];
+        ids = particles_in_box(rest, local);
+        break;
+      }
+      case FixedRegionSpec::Kind::box_fraction: ids = particles_in_box(rest, {bounds.at(f.box.min), bounds.at(f.box.max)}); break;
+      case FixedRegionSpec::Kind::half_space: {
+        HalfSpace local = f.half_space;
+        for (size_t c = 0; c < 3; ++c) local.point[c] -= origin[c];
+        ids = particles_in_half_space(rest, local);
+        break;
+      }
+      case FixedRegionSpec::Kind::label: ids = by_label(f.label); break;
+    }
+    if (ids.empty()) throw InputError(s.file.string(), "fixed[" + std::to_string(r) + "]", "selects no particle or node of the model");
+    fixed.insert(ids.begin(), ids.end());
+  }
+  return {fixed.begin(), fixed.end()};
+}
+
+// The surface file, and its vertices moved into the local frame (in double before rounding to float).
+struct LocalSurface {
+  SurfaceMesh mesh;                // vertices and lattice in the local frame
+  std::vector<float> lps_vertices; // as read
+};
+
+LocalSurface read_local_surface(const Scenario& s, const Vec3& origin) {
+  LocalSurface r;
+  r.mesh = read_surface_mesh_file(s.surface);
+  r.lps_vertices = r.mesh.vertices;
+  r.mesh.lattice.origin -= Eigen::Vector3d(origin[0], origin[1], origin[2]);
+  for (size_t i = 0; i < r.mesh.vertices.size(); ++i) {
+    r.mesh.vertices[i] = static_cast<float>(static_cast<double>(r.mesh.vertices[i]) - origin[i % 3]);
+  }
+  return r;
+}
+
+EmbeddedSurface embed_in_tets(const SurfaceMesh& surface, const TetMesh& mesh, const std::function<void(const std::string&)>& note) {
+  TetEmbeddingStats st;
+  SurfaceCoupling coupling = embed_surface_in_tets(surface.vertices, mesh, 10.0, &st);
+  if (note) {
+    note("surface: " + std::to_string(st.inside) + " vertices inside tets, " + std::to_string(st.outside) + " outside (at most " +
+         std::to_string(st.max_outside_mm) + " mm)");
+  }
+  return EmbeddedSurface(std::move(coupling), surface.triangles);
+}
+
+ScenarioEngine spring_engine(const Scenario& s, Backend backend, const std::function<void(const std::string&)>& note) {
+  const std::string sfile = s.file.string();
+  // The grid's centre sets the local frame, for every spring model (explicit springs from a tet mesh too).
+  OccupancyGrid grid = read_occupancy_grid_file(s.grid);
+  const auto& dims = grid.occupancy.geometry.dims;
+  const Eigen::Vector3d centre = grid.occupancy.geometry.index_to_world(
+      0.5 * Eigen::Vector3d(static_cast<double>(dims[0] - 1), static_cast<double>(dims[1] - 1), static_cast<double>(dims[2] - 1)));
+  const Vec3 origin = local_origin({centre[0], centre[1], centre[2]});
+  const Eigen::Vector3d shift(origin[0], origin[1], origin[2]);
+  for (ImageGeometry* g : {&grid.occupancy.geometry, &grid.fraction.geometry, &grid.label.geometry, &grid.mask.geometry}) {
+    g->origin -= shift;
+  }
+  std::optional<SpringGridModel> grid_model;
+  std::optional<TetMesh> tetmesh;
+  SpringModel model;
+  if (s.model == ModelKind::spring_grid || s.springs_from == SpringSource::grid) {
+    grid_model = build_spring_grid_model(grid, calibrated_grid_material(s.material, grid.occupancy.geometry, s.mass_from_fraction));
+    if (s.model == ModelKind::spring_grid) {
+      model = *grid_model;
+    } else {
+      model = explicit_model_from_grid(*grid_model);
+    }
+  } else {
+    tetmesh = read_tet_mesh_file(s.tetmesh);
+    for (size_t i = 0; i < tetmesh->nodes.size(); ++i) tetmesh->nodes[i] -= origin[i % 3];
+    model = calibrated_tet_spring_model(*tetmesh, s.material);
+  }
+  const std::vector<Real>& rest = std::visit([](const auto& m) -> const std::vector<Real>& { return m.rest_positions; }, model);
+  ParticleState state = std::visit([](const auto& m) { return m.make_state(); }, model);
+  fix_particles(state, fixed_particles(s, rest, bounds_of(rest), origin, [&](uint16_t label) {
+                  return grid_model ? particles_with_label(*grid_model, grid.label, label) : nodes_with_label(*tetmesh, label);
+                }));
+
+  ScenarioEngine r;
+  EmbeddedSurface surface;
+  if (!s.surface.empty()) {
+    LocalSurface local = read_local_surface(s, origin);
+    r.surface_lps_vertices = std::move(local.lps_vertices);
+    if (grid_model) {
+      surface = EmbeddedSurface(couple_surface(local.mesh, grid_model->lattice, grid_model->cells, s.coupling), local.mesh.triangles);
+    } else {
+      surface = embed_in_tets(local.mesh, *tetmesh, note);
+    }
+  }
+  if (backend == Backend::cuda) {
+    for (const auto& t : s.tools) {
+      if (t.kind == ToolKind::force) throw InputError(sfile, t.label, "force tools run on the cpu backend only; set backend: cpu");
+    }
+  }
+  SpringEngineOptions o;
+  o.dt = s.dt_s;
+  o.safety_factor = s.safety_factor;
+  o.damping_per_s = s.damping_per_s;
+  o.gravity = s.gravity;
+  o.threads = s.threads;
+  o.where = sfile;
+  o.note = note;
+  auto engine = std::make_unique<SpringEngine>(std::move(model), std::move(state), std::move(surface), origin, o, backend);
+  const double critical = engine->counts().critical_dt_s;
+  if (note) {
+    if (s.dt_s > 0 && s.dt_s > critical) {
+      note("warning: dt_s " + std::to_string(s.dt_s) + " s is above the critical step " + std::to_string(critical) +
+           " s; expect the stability guard to stop the run");
+    } else if (s.dt_s == 0) {
+      note("auto step " + std::to_string(engine->dt()) + " s (" + std::to_string(s.safety_factor) + " x critical " +
+           std::to_string(critical) + " s)");
+    }
+  }
+  r.engine = std::move(engine);
+  return r;
+}
+
+ScenarioEngine fem_engine(const Scenario& s, Backend backend, const std::function<void(const std::string&)>& note) {
+  const std::string sfile = s.file.string();
+  TetMesh mesh = read_tet_mesh_file(s.tetmesh);
+  const RestBounds lps_bounds = bounds_of(mesh.nodes);
+  const Vec3 origin = local_origin({0.5 * (lps_bounds.lo[0] + lps_bounds.hi[0]), 0.5 * (lps_bounds.lo[1] + lps_bounds.hi[1]),
+                                    0.5 * (lps_bounds.lo[2] + lps_bounds.hi[2])});
+  for (size_t i = 0; i < mesh.nodes.size(); ++i) mesh.nodes[i] -= origin[i % 3];
+  FemMaterial material;
+  material.model = s.material_law;
+  material.youngs_modulus = s.material.youngs_modulus_pa;
+  material.poisson_ratio = s.material.poisson_ratio;
+  material.density = s.material.density;
+  FemModel model = build_fem_model(mesh, material);
+  // Fixed regions: the rest positions in float (as the spring models select them), the fractions of
+  // the double-precision box.
+  const std::vector<Real> rest_real(model.nodes.begin(), model.nodes.end());
+  std::vector<int32_t> fixed_nodes =
+      fixed_particles(s, rest_real, bounds_of(model.nodes), origin, [&](uint16_t label) { return nodes_with_label(mesh, label); });
+
+  ScenarioEngine r;
+  EmbeddedSurface surface;
+  if (!s.surface.empty()) {
+    LocalSurface local = read_local_surface(s, origin);
+    r.surface_lps_vertices = std::move(local.lps_vertices);
+    surface = embed_in_tets(local.mesh, mesh, note);
+  }
+  FemEngineOptions o;
+  o.solver = s.fem_solver;
+  o.safety_factor = s.safety_factor;
+  o.mass_damping = s.damping_per_s;
+  o.gravity = s.gravity;
+  o.threads = s.threads;
+  o.where = sfile;
+  o.note = note;
+  std::optional<FemCriticalStep> crit;
+  if (s.fem_solver == FemSolver::dynamic) {
+    crit = fem_critical_time_step(model, s.safety_factor);
+    o.dt = s.dt_s > 0 ? s.dt_s : crit->dt;
+    if (o.dt > crit->critical) {
+      throw InputError(sfile, "time.dt_s", "the step " + std::to_string(o.dt) + " s is above the FEM critical step " +
+                                              std::to_string(crit->critical) + " s (element " + std::to_string(crit->element) +
+                                              ", " + std::to_string(crit->length) + " mm); use auto or a smaller step");
+    }
+  }
+  auto engine = std::make_unique<FemEngine>(std::move(model), std::move(fixed_nodes), std::move(surface), origin, o, backend);
+  if (crit && note) {
+    note("FEM " + std::string(fem_material_model_name(s.material_law)) + " explicit dynamics, dt " + std::to_string(engine->dt()) +
+         " s (critical " + std::to_string(crit->critical) + " s, element " + std::to_string(crit->element) + ")");
+  }
+  r.engine = std::move(engine);
+  return r;
+}
+
+}  // namespace
+
+ScenarioEngine make_scenario_engine(const Scenario& s, const std::function<void(const std::string&)>& note) {
+  // cuda: InputError unless this build has CUDA and a device is present; auto: cuda exactly then.
+  const Backend backend = resolve_backend(s.backend, s.file.string() + ": backend");
+  return s.model == ModelKind::fem ? fem_engine(s, backend, note) : spring_engine(s, backend, note);
+}
+
+}  // namespace ctsurg::sim

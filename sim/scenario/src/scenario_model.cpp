@@ -1,0 +1,25 @@
+#include "ctsurg/sim/scenario/scenario_model.h"
+
+namespace ctsurg::sim {
+
+ModelInputs model_inputs(const Scenario& s) {
+  ModelInputs in;
+  in.grid = s.model != ModelKind::fem;
+  in.tetmesh = s.model == ModelKind::fem || (s.model == ModelKind::explicit_springs && s.springs_from == SpringSource::tetmesh);
+  in.surface = !s.surface.empty();
+  return in;
+}
+
+std::string model_label(const Scenario& s) {
+  switch (s.model) {
+    case ModelKind::spring_grid: return "spring_grid";
+    case ModelKind::explicit_springs:
+      return s.springs_from == SpringSource::grid ? "explicit_springs (grid)" : "explicit_springs (tetmesh)";
+    case ModelKind::fem:
+      return std::string("fem ") + fem_material_model_name(s.material_law) +
+             (s.fem_solver == FemSolver::dynamic ? " (dynamic)" : " (static)");
+  }
+  return "?";
+}
+
+}  // namespace ctsurg::sim

@@ -1,0 +1,115 @@
+#include "ctsurg/sim/scenario/tool_timeline.h"
+
+#include "rest_bounds.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace ctsurg::sim {
+namespace {
+
+constexpr double kWindowTolerance = 1e-12;  // s: a step landing on start_s in floating point still starts it
+
+}  // namespace
+
+Vec3 ToolTimeline::Path::at(double time) const {
+  if (time <= t.front()) return p.front();
+  if (time >= t.back()) return p.back();
+  const size_t k = static_cast<size_t>(std::upper_bound(t.begin(), t.end(), time) - t.begin());
+  const double a = (time - t[k - 1]) / (t[k] - t[k - 1]);
+  return {p[k - 1][0] + a * (p[k][0] - p[k - 1][0]), p[k - 1][1] + a * (p[k][1] - p[k - 1][1]),
+          p[k - 1][2] + a * (p[k][2] - p[k - 1][2])};
+}
+
+ToolTimeline::ToolTimeline(const std::vector<ToolAction>& tools, const std::vector<double>& rest, const Vec3& origin,
+                           const std::function<void(const std::string&)>& note) {
+  const RestBounds bounds = bounds_of(rest);
+  for (const ToolAction& spec : tools) {
+    Tool tool;
+    tool.spec = spec;
+    Path& r = tool.path;
+    for (const auto& k : spec.path) {
+      Vec3 p = k.point.value;
+      if (k.point.kind == PointSpec::Kind::position_mm) p = {p[0] - origin[0], p[1] - origin[1], p[2] - origin[2]};
+      if (k.point.kind == PointSpec::Kind::at_fraction) p = bounds.at(p);
+      if (k.point.kind == PointSpec::Kind::offset_mm) p = {r.p.front()[0] + p[0], r.p.front()[1] + p[1], r.p.front()[2] + p[2]};
+      r.t.push_back(k.t);
+      r.p.push_back(p);
+    }
+    if (spec.snap_to_tissue) {
+      // The nearest rest particle to the first keyframe (lowest id on ties): the whole path moves by the
+      // difference, so the tool starts on tissue whatever the bounding box looks like.
+      double best = 1e300;
+      size_t bi = 0;
+      for (size_t i = 0; i < rest.size(); i += 3) {
+        const double d = std::pow(rest[i] - r.p[0][0], 2) + std::pow(rest[i + 1] - r.p[0][1], 2) + std::pow(rest[i + 2] - r.p[0][2], 2);
+        if (d < best) {
+          best = d;
+          bi = i;
+        }
+      }
+      const Vec3 shift{rest[bi] - r.p[0][0], rest[bi + 1] - r.p[0][1], rest[bi + 2] - r.p[0][2]};
+      for (auto& p : r.p) p = {p[0] + shift[0], p[1] + shift[1], p[2] + shift[2]};
+      if (note) note(spec.label + ": path snapped to tissue by " + std::to_string(std::sqrt(best)) + " mm");
+    }
+    tools_.push_back(std::move(tool));
+  }
+}
+
+Vec3 ToolTimeline::position(size_t i, double t) const { return tools_[i].path.at(t); }
+
+bool ToolTimeline::active(size_t i, double t) const {
+  const ToolAction& spec = tools_[i].spec;
+  return t >= spec.start_s - kWindowTolerance && t < spec.end_s;
+}
+
+bool ToolTimeline::idle(double t0, double t1) const {
+  for (const Tool& tool : tools_) {
+    if (tool.spec.end_s > t0 && tool.spec.start_s <= t1 + kWindowTolerance) return false;
+  }
+  return true;
+}
+
+void ToolTimeline::inputs(double t0, double t1, double min_sweep_mm, std::vector<ToolInput>& out) {
+  out.resize(tools_.size());
+  for (size_t i = 0; i < tools_.size(); ++i) {
+    Tool& tool = tools_[i];
+    const ToolAction& spec = tool.spec;
+    ToolInput& in = out[i];
+    in.kind = spec.kind;
+    in.label = spec.label;
+    in.radius_mm = spec.radius_mm;
+    in.force_n = spec.force_n;
+    in.blade_edge_mm = spec.blade_edge_mm;
+    in.active = active(i, t1);
+    in.centre = tool.path.at(t1);
+    in.start_s = spec.start_s;
+    in.start_centre = tool.path.at(spec.start_s);
+    in.sweeps.clear();
+    if (spec.kind == ToolKind::cut) sweeps(tool, t0, t1, min_sweep_mm, in.sweeps);
+  }
+}
+
+void ToolTimeline::sweeps(Tool& tool, double t0, double t1, double min_sweep_mm, std::vector<std::array<Vec3, 2>>& out) const {
+  const ToolAction& spec = tool.spec;
+  if (!tool.cut_from && t1 >= spec.start_s - kWindowTolerance && t1 < spec.end_s) tool.cut_from = std::max(spec.start_s, t0);
+  while (tool.cut_from) {
+    const double from = *tool.cut_from, to_end = std::min(t1, spec.end_s);
+    double to = to_end;
+    for (const double kt : tool.path.t) {
+      if (kt > from && kt < to) to = kt;
+    }
+    const Vec3 c0 = tool.path.at(from), c1 = tool.path.at(to);
+    const double moved = std::sqrt(std::pow(c1[0] - c0[0], 2) + std::pow(c1[1] - c0[1], 2) + std::pow(c1[2] - c0[2], 2));
+    const bool at_end = t1 >= spec.end_s;
+    if (moved < min_sweep_mm && to == to_end && !at_end) break;
+    out.push_back({c0, c1});
+    tool.cut_from = to;
+    if (to == to_end) {
+      if (at_end) tool.cut_from.reset();
+      break;
+    }
+  }
+}
+
+}  // namespace ctsurg::sim

@@ -1,0 +1,125 @@
+#include "ctsurg/sim/scenario/trajectory_recorder.h"
+
+#include "ctsurg/core/error.h"
+#include "ctsurg/core/file_hash.h"
+#include "ctsurg/core/memory_guard.h"
+#include "ctsurg/sim/scenario/scenario_model.h"
+#include "ctsurg/sim/surface/surface_measures.h"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+#include <utility>
+
+namespace ctsurg::sim {
+
+TrajectoryRecorder::TrajectoryRecorder(const Scenario& s, const SimulationEngine& engine, const ToolTimeline& timeline,
+                                       std::vector<float> surface_lps_vertices, int64_t frames)
+    : origin_(engine.origin()), write_particles_(s.write_particles) {
+  const std::vector<double>& rest = engine.rest_positions();
+  const int64_t np = static_cast<int64_t>(rest.size() / 3);
+  const int64_t nv = engine.has_surface() ? static_cast<int64_t>(surface_lps_vertices.size() / 3) : np;
+  check_allocation(static_cast<uint64_t>(frames), static_cast<uint64_t>(12 * nv + (s.write_particles ? 12 * np : 0) + 64),
+                   s.file.string(), "output.frame_interval_s");
+  traj_.scenario = s.name;
+  traj_.model = model_label(s);
+  if (engine.has_surface()) {
+    traj_.surface_file = s.surface.string();
+    traj_.surface_sha256 = sha256_file(s.surface);
+    traj_.rest_vertices = std::move(surface_lps_vertices);
+  } else {
+    // No surface: the nodes stand in for it as a point set (no triangles).
+    traj_.rest_vertices.resize(rest.size());
+    for (size_t i = 0; i < rest.size(); ++i) traj_.rest_vertices[i] = static_cast<float>(rest[i] + origin_[i % 3]);
+  }
+  if (s.write_particles) {
+    traj_.rest_particles.resize(rest.size());
+    for (size_t i = 0; i < rest.size(); ++i) traj_.rest_particles[i] = static_cast<float>(rest[i] + origin_[i % 3]);
+  }
+  metrics_ = {{"kinetic_energy", "nJ", {}},          {"elastic_energy", "nJ", {}},   {"max_displacement", "mm", {}},
+              {"surface_max_displacement", "mm", {}}, {"enclosed_volume", "mm^3", {}}, {"surface_area", "mm^2", {}},
+              {"springs_cut", "1", {}},               {"dt", "s", {}}};
+  for (const auto& [name, units] : engine.extra_metrics()) metrics_.push_back({name, units, {}});
+  for (size_t i = 0; i < timeline.size(); ++i) {
+    if (timeline.tool(i).kind == ToolKind::cut) {
+      ++blades_;
+    } else {
+      traj_.sphere_kinds.push_back(to_string(timeline.tool(i).kind));
+    }
+  }
+}
+
+void TrajectoryRecorder::record(SimulationEngine& engine, const ToolTimeline& timeline, double t) {
+  engine.surface_vertices(vertices_);
+  traj_.time.push_back(t);
+  for (size_t i = 0; i < vertices_.size(); ++i) traj_.vertices.push_back(static_cast<float>(vertices_[i] + origin_[i % 3]));
+  const std::vector<uint32_t>& triangles = engine.triangles();
+  if (traj_.topologies.empty() || traj_.topologies.back() != triangles) traj_.topologies.push_back(triangles);
+  traj_.topology_of_frame.push_back(static_cast<int32_t>(traj_.topologies.size() - 1));
+  if (write_particles_) {
+    engine.positions(positions_);
+    for (size_t i = 0; i < positions_.size(); ++i) traj_.particles.push_back(static_cast<float>(positions_[i] + origin_[i % 3]));
+  }
+  const EngineMetrics m = engine.metrics();
+  double surface_disp = m.max_displacement;
+  if (engine.has_surface()) {
+    const std::vector<Real>& rest = engine.surface_rest_vertices();
+    double worst = 0;
+    for (size_t i = 0; i < vertices_.size(); i += 3) {
+      double d = 0;
+      for (size_t c = 0; c < 3; ++c) d += std::pow(double(vertices_[i + c]) - rest[i + c], 2);
+      worst = std::max(worst, d);
+    }
+    surface_disp = std::sqrt(worst);
+  }
+  const bool surface = engine.has_surface();
+  const double values[] = {m.kinetic_energy,
+                           m.elastic_energy,
+                           m.max_displacement,
+                           surface_disp,
+                           surface ? enclosed_volume(vertices_, triangles) : 0.0,
+                           surface ? surface_area(vertices_, triangles) : 0.0,
+                           static_cast<double>(m.springs_cut),
+                           engine.dt()};
+  if (std::size(values) + m.extra.size() != metrics_.size()) {
+    throw RuntimeError("trajectory recorder: the engine gave " + std::to_string(m.extra.size()) + " extra metrics, it named " +
+                       std::to_string(metrics_.size() - std::size(values)));
+  }
+  for (size_t k = 0; k < std::size(values); ++k) metrics_[k].values.push_back(values[k]);
+  for (size_t k = 0; k < m.extra.size(); ++k) metrics_[std::size(values) + k].values.push_back(m.extra[k]);
+  for (size_t i = 0; i < timeline.size(); ++i) {
+    const ToolAction& tool = timeline.tool(i);
+    if (tool.kind == ToolKind::cut) continue;
+    const Vec3 l = timeline.position(i, t), c{l[0] + origin_[0], l[1] + origin_[1], l[2] + origin_[2]};
+    const bool on = timeline.active(i, t) && (tool.kind == ToolKind::probe || engine.engaged(i));
+    traj_.spheres.insert(traj_.spheres.end(), {c[0], c[1], c[2], on ? tool.radius_mm : 0.0});
+  }
+  for (size_t i = 0; i < timeline.size(); ++i) {
+    const ToolAction& tool = timeline.tool(i);
+    if (tool.kind != ToolKind::cut) continue;
+    const Vec3 l = timeline.position(i, t), c{l[0] + origin_[0], l[1] + origin_[1], l[2] + origin_[2]};
+    const auto& e = tool.blade_edge_mm;
+    traj_.blades.insert(traj_.blades.end(), {c[0] - e[0] / 2, c[1] - e[1] / 2, c[2] - e[2] / 2, c[0] + e[0] / 2,
+                                             c[1] + e[1] / 2, c[2] + e[2] / 2, timeline.active(i, t) ? 1.0 : 0.0});
+  }
+}
+
+void TrajectoryRecorder::truncate(size_t frames) {
+  if (frames >= traj_.time.size()) return;
+  traj_.time.resize(frames);
+  traj_.vertices.resize(frames * static_cast<size_t>(traj_.vertex_count()) * 3);
+  traj_.topology_of_frame.resize(frames);
+  traj_.topologies.resize(frames ? static_cast<size_t>(traj_.topology_of_frame.back()) + 1 : 0);
+  traj_.particles.resize(frames * traj_.rest_particles.size());
+  for (auto& m : metrics_) m.values.resize(frames);
+  traj_.spheres.resize(frames * traj_.sphere_kinds.size() * 4);
+  traj_.blades.resize(frames * blades_ * 7);
+}
+
+Trajectory TrajectoryRecorder::finish(double dt) {
+  traj_.dt_s = dt;
+  traj_.metrics = std::move(metrics_);
+  return std::move(traj_);
+}
+
+}  // namespace ctsurg::sim

@@ -1,0 +1,145 @@
+// The spring-mass models as a simulation engine (base/simulation_engine.h): the implicit 18-neighbour
+// grid or explicit springs, stepped with Verlet (spring_mass_step.h) on the CPU or, with
+// Backend::cuda, on a CUDA device (DeviceSimulation, device_simulation.h), with the same kernels.
+//
+// Per step, in order: the spring forces and the Verlet update; then, at the new time, each tool in
+// tool order (Mosegaard & Sorensen 2005, section 2.7: tools act after the integration and override
+// it): a grab's particles are set to its centre plus their offsets (captured at the first step it is
+// active: the particles strictly inside its sphere; released when it stops), a probe pushes the free
+// particles out of its sphere, a force adds (F / n) / m dt^2 to each of the n free particles inside its
+// sphere at its start (the same update as the force inside the step), and a blade cuts every spring
+// and surface triangle its edge crossed along each sweep (two triangles per sweep: tool_shapes.h).
+//
+// Stability: check_stability() runs the guard (stability.h) on the state; energy growth is not
+// counted over an interval in which a tool acted. On the CPU the engine restarts from its last
+// checkpoint with half the step (the Verlet velocities kept: previous = x - (x - previous) / 2). On a
+// device it does not restart, and force tools are refused (a force changes the state on the host
+// every step).
+//
+// The device engine keeps the state on the device: sync() copies the positions and the spring
+// presence back (output frames, stability checks and cuts call it). Grabs are held on the device
+// (DeviceSimulation's handles) and placed after every step there. Unverified on a GPU in this
+// repository's CI (docs/gpu.md).
+//
+// Units: mm (local frame: LPS minus origin), s, g.
+#pragma once
+
+#include "ctsurg/sim/base/backend.h"
+#include "ctsurg/sim/base/particle_state.h"
+#include "ctsurg/sim/base/simulation_engine.h"
+#include "ctsurg/sim/springs/explicit_spring_model.h"
+#include "ctsurg/sim/springs/sphere_tools.h"
+#include "ctsurg/sim/springs/spring_grid_model.h"
+#include "ctsurg/sim/springs/spring_mass_step.h"
+#include "ctsurg/sim/springs/stability.h"
+#include "ctsurg/sim/surface/embedded_surface.h"
+
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+#include <variant>
+#include <vector>
+
+namespace ctsurg::sim {
+
+using SpringModel = std::variant<SpringGridModel, ExplicitSpringModel>;
+
+struct SpringEngineOptions {
+  double dt = 0;                          // s; 0 = safety_factor x the critical step (stability.h)
+  double safety_factor = kDefaultSafetyFactor;
+  double damping_per_s = 0;               // mass-proportional damping rate alpha, 1/s: Verlet damping
+                                          //   min(0.99, alpha dt) per step
+  std::array<double, 3> gravity{0, 0, 0};  // mm/s^2, LPS
+  int threads = 0;                        // CPU threads, 0 = automatic
+  std::string where = "spring engine";    // names the run in messages (a scenario file)
+  std::function<void(const std::string&)> note;  // what the engine decides (captures), for a log; may be empty
+};
+
+class SpringStepper;  // where the state is stepped (src/spring_stepper.h: the CPU or a CUDA device)
+
+class SpringEngine final : public SimulationEngine {
+ public:
+  // model and state (its particles, with the fixed ones fixed: inverse mass 0) in the local frame whose
+  // origin is `origin` (LPS mm); surface: the surface the model carries (may be empty). Throws
+  // InputError as critical_time_step for a model without springs, as step() for parameters out of
+  // range, and as DeviceSimulation for cuda where it cannot run.
+  SpringEngine(SpringModel model, ParticleState state, EmbeddedSurface surface, const Vec3& origin,
+               const SpringEngineOptions& options, Backend backend = Backend::cpu);
+  ~SpringEngine() override;
+  // Not copied or moved: the state lives where its solvers point.
+  SpringEngine(const SpringEngine&) = delete;
+  SpringEngine& operator=(const SpringEngine&) = delete;
+
+  const SpringModel& model() const { return model_; }
+  const ParticleState& state() const { return state_; }  // the host's copy (current after sync())
+
+  EngineCounts counts() const override { return counts_; }
+  const Vec3& origin() const override { return origin_; }
+  const std::vector<double>& rest_positions() const override { return rest_; }
+  bool has_surface() const override { return !surface_.empty(); }
+  double blade_sweep_mm() const override;
+
+  bool quasi_static() const override { return false; }
+  double dt() const override { return params_.dt; }
+  double time() const override { return time_; }
+  int64_t steps() const override { return steps_; }
+  StabilityReport step(const std::vector<ToolInput>& tools, int steps) override;
+  void equilibrium(const std::vector<ToolInput>& tools, double time) override;
+
+  void sync() override;
+  void positions(std::vector<double>& xyz) const override;
+  void surface_vertices(std::vector<float>& xyz) override;
+  const std::vector<uint32_t>& triangles() const override { return surface_.triangles(); }
+  const std::vector<Real>& surface_rest_vertices() const override { return surface_.rest_vertices(); }
+  EngineMetrics metrics() const override;
+  bool engaged(size_t tool) const override;
+
+  StabilityReport check_stability() override;
+  bool can_restart() const override;
+  void save_checkpoint() override;
+  void restart_halved() override;
+
+ private:
+  // What a tool holds (by tool index).
+  struct Hold {
+    std::optional<Grab> grab;     // grab: the captured particles
+    int handle = -1;              // grab: the stepper's name for it (a device holds several)
+    std::vector<int32_t> loaded;  // force: the free particles sharing it
+    bool released = false;        // let go, for good
+  };
+  struct Checkpoint {
+    ParticleState state;
+    SpringModel model;
+    std::vector<Hold> holds;
+    EmbeddedSurface surface;
+    double time = 0;
+    int64_t steps = 0, springs_cut = 0, triangles_removed = 0;
+  };
+
+  void apply_tools(const std::vector<ToolInput>& tools);
+  void sweep_blade(const ToolInput& blade, const Vec3& from, const Vec3& to);
+  void note(const std::string& text) const;
+  StabilityGuard make_guard() const;
+
+  SpringModel model_;
+  ParticleState state_;
+  EmbeddedSurface surface_;
+  Vec3 origin_;
+  SpringEngineOptions options_;
+  std::vector<Real> rest_real_;  // the model's rest positions (#P x 3 mm), as the kernels read them
+  std::vector<double> rest_;     // the same in double (exactly)
+  CriticalStep critical_;
+  StepParameters params_;
+  StabilityGuard guard_;
+  EngineCounts counts_;
+  std::unique_ptr<SpringStepper> stepper_;
+  std::vector<Hold> holds_;
+  std::vector<float> vertices_;  // scratch: the surface for a cut
+  double time_ = 0;
+  int64_t steps_ = 0, springs_cut_ = 0, triangles_removed_ = 0;
+  bool tool_work_ = false;       // a tool acted since the last stability check
+  std::optional<Checkpoint> checkpoint_;
+};
+
+}  // namespace ctsurg::sim

@@ -1,0 +1,289 @@
+#include "ctsurg/sim/springs/spring_engine.h"
+
+#include "ctsurg/core/error.h"
+#include "spring_stepper.h"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+#include <type_traits>
+#include <utility>
+
+namespace ctsurg::sim {
+namespace {
+
+std::vector<Real> rest_of(const SpringModel& model) {
+  return std::visit([](const auto& m) { return m.rest_positions; }, model);
+}
+
+// The springs present at the start (the grid counts each spring once; explicit: the alive ones).
+int64_t present_springs(const SpringModel& model) {
+  return std::visit([](const auto& m) -> int64_t {
+    if constexpr (std::is_same_v<std::decay_t<decltype(m)>, SpringGridModel>) {
+      return m.spring_count();
+    } else {
+      return m.alive_spring_count();
+    }
+  }, model);
+}
+
+double shortest_spring(const SpringModel& model) {
+  return std::visit([](const auto& m) -> double {
+    if constexpr (std::is_same_v<std::decay_t<decltype(m)>, SpringGridModel>) {
+      return *std::min_element(m.rest_length.begin(), m.rest_length.end());
+    } else {
+      return m.rest_length.empty() ? 1.0 : static_cast<double>(*std::min_element(m.rest_length.begin(), m.rest_length.end()));
+    }
+  }, model);
+}
+
+StepParameters step_parameters(double dt, const SpringEngineOptions& o) {
+  StepParameters p;
+  p.dt = dt;
+  p.damping = std::min(0.99, o.damping_per_s * dt);
+  p.gravity = o.gravity;
+  p.threads = o.threads;
+  return p;
+}
+
+std::string lps_text(const Vec3& local, const Vec3& origin) {
+  return "(" + std::to_string(local[0] + origin[0]) + ", " + std::to_string(local[1] + origin[1]) + ", " +
+         std::to_string(local[2] + origin[2]) + ") LPS mm";
+}
+
+}  // namespace
+
+SpringEngine::SpringEngine(SpringModel model, ParticleState state, EmbeddedSurface surface, const Vec3& origin,
+                           const SpringEngineOptions& options, Backend backend)
+    : model_(std::move(model)),
+      state_(std::move(state)),
+      surface_(std::move(surface)),
+      origin_(origin),
+      options_(options),
+      rest_real_(rest_of(model_)),
+      rest_(rest_real_.begin(), rest_real_.end()),
+      critical_(std::visit([&](const auto& m) { return critical_time_step(m, options_.safety_factor); }, model_)),
+      params_(step_parameters(options_.dt > 0 ? options_.dt : critical_.dt, options_)),
+      guard_(make_guard()) {
+  if (static_cast<size_t>(state_.count()) * 3 != rest_real_.size()) {
+    throw InputError(options_.where, "state", "has " + std::to_string(state_.count()) + " particles, the model " +
+                                                  std::to_string(rest_real_.size() / 3));
+  }
+  counts_.nodes = state_.count();
+  counts_.fixed = std::count(state_.inv_mass.begin(), state_.inv_mass.end(), Real(0));
+  counts_.springs = present_springs(model_);
+  counts_.critical_dt_s = critical_.critical;
+  if (backend == Backend::cuda) {
+    stepper_ = std::make_unique<DeviceSpringStepper>(model_, state_);
+    note("backend cuda: " + cuda_device_info(0).name);
+  } else {
+    stepper_ = std::make_unique<HostSpringStepper>(model_, state_, options_.threads);
+  }
+}
+
+SpringEngine::~SpringEngine() = default;
+
+StabilityGuard SpringEngine::make_guard() const {
+  StabilityGuardOptions o;
+  o.gravity = std::sqrt(options_.gravity[0] * options_.gravity[0] + options_.gravity[1] * options_.gravity[1] +
+                        options_.gravity[2] * options_.gravity[2]);
+  return std::visit([&](const auto& m) { return make_stability_guard(m, params_.dt, o); }, model_);
+}
+
+void SpringEngine::note(const std::string& text) const {
+  if (options_.note) options_.note(text);
+}
+
+// The blade cuts once its centre has moved a quarter of the shortest spring (or reaches a keyframe or
+// its end): a spring cannot slip between two sweeps, and sweeping every step would cost a pass over
+// the model per step.
+double SpringEngine::blade_sweep_mm() const { return 0.25 * shortest_spring(model_); }
+
+StabilityReport SpringEngine::step(const std::vector<ToolInput>& tools, int steps) {
+  for (int k = 0; k < steps; ++k) {
+    stepper_->step(params_);
+    ++steps_;
+    time_ += params_.dt;
+    apply_tools(tools);
+  }
+  return {};
+}
+
+void SpringEngine::equilibrium(const std::vector<ToolInput>&, double) {
+  throw RuntimeError(options_.where + ": a spring model has no quasi-static solve (it steps in time)");
+}
+
+void SpringEngine::apply_tools(const std::vector<ToolInput>& tools) {
+  if (holds_.size() < tools.size()) holds_.resize(tools.size());
+  for (size_t i = 0; i < tools.size(); ++i) {
+    const ToolInput& tool = tools[i];
+    Hold& h = holds_[i];
+    switch (tool.kind) {
+      case ToolKind::grab:
+        if (!h.grab && !h.released && tool.active) {
+          h.grab = stepper_->capture({tool.centre, tool.radius_mm}, true, &h.handle);
+          if (h.grab->particles.empty()) {
+            throw InputError(options_.where, tool.label,
+                             "grabs no particle at t = " + std::to_string(time_) + " s (sphere of radius " +
+                                 std::to_string(tool.radius_mm) + " mm at " + lps_text(tool.centre, origin_) +
+                                 "); move it onto the tissue or set snap_to_tissue: true");
+          }
+          note(tool.label + ": grabbed " + std::to_string(h.grab->particles.size()) + " particles at t = " +
+               std::to_string(time_) + " s");
+        }
+        if (h.grab && !tool.active) {
+          h.grab.reset();
+          stepper_->release_grab(h.handle);
+          h.released = true;
+          tool_work_ = true;  // the release turns the stretch into motion
+        }
+        if (h.grab) {
+          stepper_->apply_grab(*h.grab, h.handle, tool.centre);
+          tool_work_ = true;
+        }
+        break;
+      case ToolKind::force: {
+        // An external force F shared by n free particles adds (F / n) / m dt^2 to each one's Verlet
+        // update: applied after the step, as the papers apply the tools, it is the same update as a
+        // force inside the step (x_next = ... + (f + F / n) / m dt^2).
+        if (stepper_->on_device()) {
+          throw InputError(options_.where, tool.label, "force tools run on the cpu backend only; set backend: cpu");
+        }
+        if (h.loaded.empty() && !h.released && tool.active) {
+          const Grab inside = stepper_->capture({tool.centre, tool.radius_mm}, false, nullptr);
+          for (const int32_t p : inside.particles) {
+            if (state_.inv_mass[static_cast<size_t>(p)] > 0) h.loaded.push_back(p);
+          }
+          if (h.loaded.empty()) {
+            throw InputError(options_.where, tool.label, "the force's sphere holds no free particle at t = " +
+                                                             std::to_string(time_) +
+                                                             " s; move it onto the tissue or set snap_to_tissue: true");
+          }
+          note(tool.label + ": force shared by " + std::to_string(h.loaded.size()) + " particles");
+        }
+        if (!h.loaded.empty() && !tool.active) {
+          h.loaded.clear();
+          h.released = true;
+          tool_work_ = true;
+        }
+        const double n = static_cast<double>(h.loaded.size());
+        const double dt = params_.dt;
+        for (const int32_t p : h.loaded) {
+          const size_t k = static_cast<size_t>(p);
+          const double a = 1e6 / n * state_.inv_mass[k] * dt * dt;  // N -> uN = g mm/s^2
+          state_.x[k] += static_cast<Real>(tool.force_n[0] * a);
+          state_.y[k] += static_cast<Real>(tool.force_n[1] * a);
+          state_.z[k] += static_cast<Real>(tool.force_n[2] * a);
+        }
+        tool_work_ |= !h.loaded.empty();
+        break;
+      }
+      case ToolKind::probe:
+        if (tool.active) tool_work_ |= stepper_->probe({tool.centre, tool.radius_mm}) > 0;
+        break;
+      case ToolKind::cut:
+        for (const auto& [from, to] : tool.sweeps) {
+          sweep_blade(tool, from, to);
+          tool_work_ = true;
+        }
+        break;
+    }
+  }
+}
+
+// Cuts the springs and the surface crossing the quad the blade's edge swept from centre `from` to `to`.
+void SpringEngine::sweep_blade(const ToolInput& blade, const Vec3& from, const Vec3& to) {
+  stepper_->to_host();
+  if (!surface_.empty()) surface_.move(state_, rest_real_, vertices_, Backend::cpu, options_.threads);
+  for (const Triangle& tri : swept_blade(from, to, blade.blade_edge_mm)) {
+    if (!surface_.empty()) triangles_removed_ += surface_.cut(tri, vertices_, state_);
+    springs_cut_ += stepper_->cut(tri);
+  }
+}
+
+void SpringEngine::sync() { stepper_->to_host(); }
+
+void SpringEngine::positions(std::vector<double>& xyz) const {
+  const size_t n = static_cast<size_t>(state_.count());
+  xyz.resize(3 * n);
+  for (size_t i = 0; i < n; ++i) {
+    xyz[3 * i] = state_.x[i];
+    xyz[3 * i + 1] = state_.y[i];
+    xyz[3 * i + 2] = state_.z[i];
+  }
+}
+
+void SpringEngine::surface_vertices(std::vector<float>& xyz) {
+  if (!surface_.empty()) {
+    surface_.move(state_, rest_real_, xyz, Backend::cpu, options_.threads);
+    return;
+  }
+  const size_t n = static_cast<size_t>(state_.count());
+  xyz.resize(3 * n);
+  for (size_t i = 0; i < n; ++i) {
+    xyz[3 * i] = state_.x[i];
+    xyz[3 * i + 1] = state_.y[i];
+    xyz[3 * i + 2] = state_.z[i];
+  }
+}
+
+EngineMetrics SpringEngine::metrics() const {
+  EngineMetrics m;
+  m.kinetic_energy = kinetic_energy(state_, params_.dt);
+  m.elastic_energy = std::visit([&](const auto& model) { return spring_energy(model, state_); }, model_);
+  double max_disp = 0;
+  for (int32_t i = 0; i < state_.count(); ++i) {
+    const size_t k = static_cast<size_t>(i);
+    const double d = std::pow(state_.x[k] - rest_real_[3 * k], 2) + std::pow(state_.y[k] - rest_real_[3 * k + 1], 2) +
+                     std::pow(state_.z[k] - rest_real_[3 * k + 2], 2);
+    max_disp = std::max(max_disp, d);
+  }
+  m.max_displacement = std::sqrt(max_disp);
+  m.springs_cut = springs_cut_;
+  m.triangles_removed = triangles_removed_;
+  return m;
+}
+
+bool SpringEngine::engaged(size_t tool) const {
+  return tool < holds_.size() && (holds_[tool].grab.has_value() || !holds_[tool].loaded.empty());
+}
+
+StabilityReport SpringEngine::check_stability() {
+  stepper_->to_host();
+  const StabilityReport r = guard_.check(state_, time_, tool_work_);
+  tool_work_ = false;
+  return r;
+}
+
+bool SpringEngine::can_restart() const { return !stepper_->on_device(); }
+
+void SpringEngine::save_checkpoint() {
+  if (!can_restart()) throw RuntimeError(options_.where + ": a spring model on a CUDA device does not restart");
+  checkpoint_ = Checkpoint{state_, model_, holds_, surface_, time_, steps_, springs_cut_, triangles_removed_};
+}
+
+void SpringEngine::restart_halved() {
+  if (!checkpoint_) throw RuntimeError(options_.where + ": no checkpoint to restart from");
+  const Checkpoint& c = *checkpoint_;
+  state_ = c.state;
+  model_ = c.model;
+  holds_ = c.holds;
+  surface_ = c.surface;
+  time_ = c.time;
+  steps_ = c.steps;
+  springs_cut_ = c.springs_cut;
+  triangles_removed_ = c.triangles_removed;
+  // Verlet's previous positions are rescaled so that the velocities stay the same:
+  // x_prev = x - (x - x_prev) / 2.
+  for (int32_t i = 0; i < state_.count(); ++i) {
+    const size_t k = static_cast<size_t>(i);
+    state_.px[k] = state_.x[k] - (state_.x[k] - state_.px[k]) / 2;
+    state_.py[k] = state_.y[k] - (state_.y[k] - state_.py[k]) / 2;
+    state_.pz[k] = state_.z[k] - (state_.z[k] - state_.pz[k]) / 2;
+  }
+  params_ = step_parameters(params_.dt / 2, options_);
+  guard_ = make_guard();
+  tool_work_ = true;  // the restart changes the energy the guard last saw
+}
+
+}  // namespace ctsurg::sim

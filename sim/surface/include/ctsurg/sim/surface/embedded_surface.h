@@ -1,0 +1,47 @@
+// The surface a model carries: the rendered surface's triangles and each vertex's tie to the model's
+// nodes (a grid model's lattice cell: surface_coupling.h; a tet: tet_embedding.h). It follows the nodes'
+// displacements (move) and is cut with the same blade as the model's springs (cut: crossed triangles
+// removed, vertices detached from nodes across the blade; surface_cutting.h), so an incision opens on
+// screen. A simulation engine (base/simulation_engine.h) keeps one with its model; empty when the
+// scenario has no surface.
+//
+// Units: mm, in the engine's local frame.
+#pragma once
+
+#include "ctsurg/sim/base/backend.h"
+#include "ctsurg/sim/base/particle_state.h"
+#include "ctsurg/sim/base/tool_shapes.h"
+#include "ctsurg/sim/surface/surface_coupling.h"
+
+#include <cstdint>
+#include <vector>
+
+namespace ctsurg::sim {
+
+class EmbeddedSurface {
+ public:
+  EmbeddedSurface() = default;  // no surface
+  // coupling: each vertex's nodes and weights (its rest_vertices are the surface's, #V x 3 mm);
+  // triangles: #F x 3 vertex ids. Throws InputError("surface", "triangles", ...) for an id out of range.
+  EmbeddedSurface(SurfaceCoupling coupling, std::vector<uint32_t> triangles);
+
+  bool empty() const { return coupling_.rest_vertices.empty(); }
+  int64_t vertex_count() const { return coupling_.vertex_count(); }
+  const std::vector<uint32_t>& triangles() const { return triangles_; }  // #F x 3, now
+  const std::vector<Real>& rest_vertices() const { return coupling_.rest_vertices; }  // #V x 3 mm
+  const SurfaceCoupling& coupling() const { return coupling_; }
+
+  // The vertices (#V x 3 mm; resized) where the nodes at `positions` put them; `rest` (#P x 3 mm): the
+  // nodes' rest positions (move_surface in surface_coupling.h).
+  void move(const ParticleState& positions, const std::vector<Real>& rest, std::vector<float>& vertices, Backend backend,
+            int threads) const;
+  // Cuts along the blade triangle; `vertices` are the surface's now (move()) and `positions` the nodes'.
+  // Returns the number of triangles removed.
+  int64_t cut(const Triangle& blade, const std::vector<float>& vertices, const ParticleState& positions);
+
+ private:
+  SurfaceCoupling coupling_;
+  std::vector<uint32_t> triangles_;
+};
+
+}  // namespace ctsurg::sim
