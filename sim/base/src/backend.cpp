@@ -41,10 +41,6 @@ void require_backend(Backend backend, const std::string& where) {
   if (backend == Backend::cpu) return;
   const std::string reason = cuda_unavailable_reason();
   if (!reason.empty()) throw InputError(where, "backend", reason);
-  throw InputError(where, "backend",
-                   "cuda was asked for, but this function works on host arrays and runs on the CPU only; the CUDA "
-                   "backend is DeviceSimulation (ctsurg/sim/device_simulation.h), which keeps the state on the "
-                   "device");
 }
 
 Backend resolve_backend(const std::string& name, const std::string& where) {

@@ -176,7 +176,7 @@ void FemEngine::surface_vertices(std::vector<float>& xyz) {
     positions_.y[i] = static_cast<Real>(rest[3 * i + 1] + u_[3 * i + 1]);
     positions_.z[i] = static_cast<Real>(rest[3 * i + 2] + u_[3 * i + 2]);
   }
-  surface_.move(positions_, rest_real_, xyz, backend_, options_.threads);
+  surface_.move(positions_, rest_real_, xyz, options_.threads);
 }
 
 EngineMetrics FemEngine::metrics() const {

@@ -28,8 +28,7 @@ void element_displacements(const FemModel& model, int32_t e, const std::vector<d
 }  // namespace
 
 int32_t fem_internal_forces(const FemModel& model, const std::vector<double>& displacements, std::vector<double>& forces,
-                            Backend backend, int threads) {
-  require_backend(backend, "fem forces");
+                            int threads) {
   check_displacements(model, displacements, "fem forces");
   const FemElementView<double> el{model.tets.data(), model.dm_inverse.data(), model.rest_volume.data(),
                                   model.tet_count(), static_cast<int32_t>(model.material.model), model.lame.mu,

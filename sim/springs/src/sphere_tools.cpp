@@ -20,8 +20,7 @@ SphereView sphere_view(const std::array<double, 3>& centre, double radius, const
 
 }  // namespace
 
-Grab grab_particles_in_sphere(const ParticleState& state, const Sphere& tool, Backend backend, int threads) {
-  require_backend(backend, "grab");
+Grab grab_particles_in_sphere(const ParticleState& state, const Sphere& tool, int threads) {
   const SphereView s = sphere_view(tool.centre, tool.radius, "grab");
   std::vector<uint8_t> inside(static_cast<std::size_t>(state.count()));
   cpu::inside_sphere(state.x.data(), state.y.data(), state.z.data(), state.count(), s, inside.data(), threads);
@@ -36,8 +35,7 @@ Grab grab_particles_in_sphere(const ParticleState& state, const Sphere& tool, Ba
   return grab;
 }
 
-void apply_grab(ParticleState& state, const Grab& grab, const std::array<double, 3>& centre, Backend backend, int threads) {
-  require_backend(backend, "grab");
+void apply_grab(ParticleState& state, const Grab& grab, const std::array<double, 3>& centre, int threads) {
   if (grab.offsets.size() != 3 * grab.particles.size()) throw InputError("grab", "offsets", "expected 3 per grabbed particle");
   for (int32_t p : grab.particles)
     if (p < 0 || p >= state.count()) throw InputError("grab", "particles", "id " + std::to_string(p) + " out of range");
@@ -46,8 +44,7 @@ void apply_grab(ParticleState& state, const Grab& grab, const std::array<double,
                      static_cast<int64_t>(grab.particles.size()), s, threads);
 }
 
-int64_t probe_sphere(ParticleState& state, const Sphere& tool, Backend backend, int threads) {
-  require_backend(backend, "probe");
+int64_t probe_sphere(ParticleState& state, const Sphere& tool, int threads) {
   const SphereView s = sphere_view(tool.centre, tool.radius, "probe");
   return cpu::probe(state.x.data(), state.y.data(), state.z.data(), state.inv_mass.data(), state.count(), s, threads);
 }

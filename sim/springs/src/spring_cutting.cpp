@@ -28,9 +28,7 @@ void check_state(int32_t model_count, const ParticleState& state) {
 
 }  // namespace
 
-int64_t cut_springs_crossing_triangle(SpringGridModel& model, const ParticleState& state, const Triangle& blade,
-                                      Backend backend, int threads) {
-  require_backend(backend, "cut");
+int64_t cut_springs_crossing_triangle(SpringGridModel& model, const ParticleState& state, const Triangle& blade, int threads) {
   check_state(model.particle_count(), state);
   const int64_t ends = cpu::cut_grid(model.view(), model.spring_mask.data(), state.x.data(), state.y.data(),
                                      state.z.data(), triangle_view(blade), threads);
@@ -38,8 +36,7 @@ int64_t cut_springs_crossing_triangle(SpringGridModel& model, const ParticleStat
 }
 
 int64_t cut_springs_crossing_triangle(ExplicitSpringModel& model, const ParticleState& state, const Triangle& blade,
-                                      Backend backend, int threads) {
-  require_backend(backend, "cut");
+                                      int threads) {
   check_state(model.particle_count(), state);
   const int64_t cut = cpu::cut_explicit(model.spring_ends.data(), model.alive.data(), model.spring_count(),
                                        state.x.data(), state.y.data(), state.z.data(), triangle_view(blade), threads);

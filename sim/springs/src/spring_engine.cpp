@@ -194,7 +194,7 @@ void SpringEngine::apply_tools(const std::vector<ToolInput>& tools) {
 // Cuts the springs and the surface crossing the quad the blade's edge swept from centre `from` to `to`.
 void SpringEngine::sweep_blade(const ToolInput& blade, const Vec3& from, const Vec3& to) {
   stepper_->to_host();
-  if (!surface_.empty()) surface_.move(state_, rest_real_, vertices_, Backend::cpu, options_.threads);
+  if (!surface_.empty()) surface_.move(state_, rest_real_, vertices_, options_.threads);
   for (const Triangle& tri : swept_blade(from, to, blade.blade_edge_mm)) {
     if (!surface_.empty()) triangles_removed_ += surface_.cut(tri, vertices_, state_);
     springs_cut_ += stepper_->cut(tri);
@@ -215,7 +215,7 @@ void SpringEngine::positions(std::vector<double>& xyz) const {
 
 void SpringEngine::surface_vertices(std::vector<float>& xyz) {
   if (!surface_.empty()) {
-    surface_.move(state_, rest_real_, xyz, Backend::cpu, options_.threads);
+    surface_.move(state_, rest_real_, xyz, options_.threads);
     return;
   }
   const size_t n = static_cast<size_t>(state_.count());

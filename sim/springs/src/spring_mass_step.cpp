@@ -28,9 +28,7 @@ void size_normals(ParticleNormals* normals, int32_t n) {
 
 }  // namespace
 
-void step(const SpringGridModel& model, ParticleState& state, const StepParameters& parameters, Backend backend,
-          ParticleNormals* normals) {
-  require_backend(backend, "step");
+void step(const SpringGridModel& model, ParticleState& state, const StepParameters& parameters, ParticleNormals* normals) {
   const VerletConstants c = check_parameters(parameters, model.particle_count(), state);
   size_normals(normals, state.count());
   const bool damping = std::any_of(model.damping.begin(), model.damping.end(), [](Real v) { return v > 0; });
@@ -39,9 +37,7 @@ void step(const SpringGridModel& model, ParticleState& state, const StepParamete
   state.advance();
 }
 
-void step(const ExplicitSpringModel& model, ParticleState& state, const StepParameters& parameters, Backend backend,
-          ParticleNormals* normals) {
-  require_backend(backend, "step");
+void step(const ExplicitSpringModel& model, ParticleState& state, const StepParameters& parameters, ParticleNormals* normals) {
   const VerletConstants c = check_parameters(parameters, model.particle_count(), state);
   size_normals(normals, state.count());
   const bool damping = model.spring_damping;

@@ -41,16 +41,16 @@ class HostSpringStepper final : public SpringStepper {
  public:
   HostSpringStepper(SpringModel& model, ParticleState& state, int threads) : model_(model), state_(state), threads_(threads) {}
   void step(const StepParameters& p) override {
-    std::visit([&](const auto& m) { sim::step(m, state_, p, Backend::cpu); }, model_);
+    std::visit([&](const auto& m) { sim::step(m, state_, p); }, model_);
   }
-  Grab capture(const Sphere& tool, bool, int*) override { return grab_particles_in_sphere(state_, tool, Backend::cpu, threads_); }
+  Grab capture(const Sphere& tool, bool, int*) override { return grab_particles_in_sphere(state_, tool, threads_); }
   void apply_grab(const Grab& grab, int, const std::array<double, 3>& centre) override {
-    sim::apply_grab(state_, grab, centre, Backend::cpu, threads_);
+    sim::apply_grab(state_, grab, centre, threads_);
   }
   void release_grab(int) override {}
-  int64_t probe(const Sphere& tool) override { return probe_sphere(state_, tool, Backend::cpu, threads_); }
+  int64_t probe(const Sphere& tool) override { return probe_sphere(state_, tool, threads_); }
   int64_t cut(const Triangle& blade) override {
-    return std::visit([&](auto& m) { return cut_springs_crossing_triangle(m, state_, blade, Backend::cpu, threads_); }, model_);
+    return std::visit([&](auto& m) { return cut_springs_crossing_triangle(m, state_, blade, threads_); }, model_);
   }
   void to_host() override {}
   void from_host() override {}

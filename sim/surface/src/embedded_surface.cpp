@@ -18,8 +18,8 @@ EmbeddedSurface::EmbeddedSurface(SurfaceCoupling coupling, std::vector<uint32_t>
 }
 
 void EmbeddedSurface::move(const ParticleState& positions, const std::vector<Real>& rest, std::vector<float>& vertices,
-                           Backend backend, int threads) const {
-  move_surface(coupling_, positions, rest, vertices, backend, threads);
+                           int threads) const {
+  move_surface(coupling_, positions, rest, vertices, threads);
 }
 
 int64_t EmbeddedSurface::cut(const Triangle& blade, const std::vector<float>& vertices, const ParticleState& positions) {

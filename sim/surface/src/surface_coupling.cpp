@@ -75,8 +75,7 @@ SurfaceCoupling couple_surface(const SurfaceMesh& mesh, const ImageGeometry& lat
 }
 
 void move_surface(const SurfaceCoupling& coupling, const ParticleState& state, const std::vector<Real>& rest_positions,
-                  std::vector<float>& vertices, Backend backend, int threads) {
-  require_backend(backend, "move_surface");
+                  std::vector<float>& vertices, int threads) {
   if (rest_positions.size() != 3 * static_cast<std::size_t>(state.count()))
     throw InputError("move_surface", "rest_positions", "expected 3 x the state's particle count");
   for (int32_t p : coupling.particles)

@@ -5,8 +5,6 @@
 #include "ctsurg/sim/fem/fem_explicit_dynamics.h"
 #include "ctsurg/sim/fem/fem_static_solver.h"
 #include "ctsurg/sim/springs/device_simulation.h"
-#include "ctsurg/sim/springs/sphere_tools.h"
-#include "ctsurg/sim/springs/spring_mass_step.h"
 #include "sim_test_models.h"
 
 #include <gtest/gtest.h>
@@ -77,22 +75,6 @@ TEST(Backend, WithoutADeviceCudaIsRefusedClearly) {
     EXPECT_NE(e.problem().find("use cpu or auto"), std::string::npos) << e.problem();
   }
   EXPECT_EQ(input_error([] { DeviceSimulation simulation; }).file(), "device simulation");
-}
-
-// The host-array dispatchers never run cuda on the CPU silently: without a device they refuse as
-// above, with one they name DeviceSimulation.
-TEST(Backend, HostArrayDispatchersRefuseCudaOnEveryMachine) {
-  const auto model = build_spring_grid_model(test::block_occupancy(3, 3, 3, 2.0), test::test_material());
-  auto state = model.make_state();
-  StepParameters p;
-  p.dt = 1e-4;
-  const InputError e = input_error([&] { step(model, state, p, Backend::cuda); });
-  EXPECT_EQ(e.file(), "step");
-  EXPECT_EQ(e.field(), "backend");
-  if (backend_available(Backend::cuda)) {
-    EXPECT_NE(e.problem().find("DeviceSimulation"), std::string::npos) << e.problem();
-  }
-  EXPECT_EQ(input_error([&] { probe_sphere(state, {{0, 0, 0}, 1.0}, Backend::cuda); }).field(), "backend");
 }
 
 }  // namespace

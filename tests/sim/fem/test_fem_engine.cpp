@@ -1,8 +1,10 @@
 // Tests for ctsurg/sim/fem/fem_engine.h on an 8 x 2 x 2 mm bar of Kuhn tets fixed at x = 0: a
 // quasi-static grab of the free end reaches its equilibrium with the grabbed nodes exactly where the
-// tool put them, and the embedded surface follows; the dynamic engine moves the grabbed end with the
-// tool, steps in batches and counts its steps; what the FEM does not take (a blade, a probe in a
-// static run, a static run with nothing fixed) is refused with the file and the field.
+// tool put them, the embedded surface follows, and the frames come from the host whatever backend the
+// solver runs on (a linear static engine on cuda solves on the CPU: it must not hand its backend to a
+// host function); the dynamic engine moves the grabbed end with the tool, steps in batches and
+// counts its steps; what the FEM does not take (a blade, a probe in a static run, a static run with
+// nothing fixed) is refused with the file and the field.
 #include "ctsurg/sim/fem/fem_engine.h"
 
 #include "ctsurg/core/error.h"
@@ -74,6 +76,22 @@ TEST(FemEngine, QuasiStaticGrabHoldsTheGrabbedNodesAndTheSurfaceFollows) {
   EXPECT_GT(v[5], 2.5);          // near the lifted end
   ASSERT_FALSE(notes.empty());
   EXPECT_NE(notes.back().find("grabbed 6 nodes at t = 0.000000 s"), std::string::npos) << notes.back();
+}
+
+// The defect the single runner fixed: the FEM runner handed the scenario's backend to the surface's
+// host-array kernel, so every FEM scenario with a surface on backend cuda threw at its first frame. A
+// linear static engine solves on the CPU on every backend, so this runs without a GPU too.
+TEST(FemEngine, SurfaceFramesComeFromTheHostOnEveryBackend) {
+  for (const Backend backend : {Backend::cpu, Backend::cuda}) {
+    SCOPED_TRACE(backend_name(backend));
+    FemEngine e = static_engine(FemMaterialModel::linear, backend);
+    e.equilibrium({grab_end({8, 1, 2})}, 0.1);
+    e.sync();
+    std::vector<float> v;
+    ASSERT_NO_THROW(e.surface_vertices(v));
+    ASSERT_EQ(v.size(), 12u);
+    EXPECT_GT(v[5], 2.5);
+  }
 }
 
 TEST(FemEngine, DynamicGrabMovesTheEndAndIdleStepsGoInBatches) {

@@ -48,7 +48,7 @@ TEST(EmbeddedSurface, FollowsTheParticlesAndIsCutByTheBlade) {
   ParticleState p(e.rest, std::vector<Real>(4, Real(1)));
   for (int32_t i = 0; i < 4; ++i) p.x[static_cast<size_t>(i)] += 2;  // translate by 2 mm in x
   std::vector<float> v;
-  e.surface.move(p, e.rest, v, Backend::cpu, 1);
+  e.surface.move(p, e.rest, v, 1);
   ASSERT_EQ(v.size(), kCube.size());
   for (size_t i = 0; i < v.size(); ++i) EXPECT_NEAR(v[i], kCube[i] + (i % 3 == 0 ? 2 : 0), 1e-5);
   EXPECT_NEAR(enclosed_volume(v, e.surface.triangles()), 1.0, 1e-5);

@@ -1,7 +1,10 @@
-// The backend seam: where a kernel runs. Every public simulation function takes a Backend and
-// dispatches after checking its arguments once (STYLE.md rule 5, Open3D's device dispatch). State
-// lives in contiguous arrays (particle_state.h) that a CUDA backend mirrors on the device; the kernels
-// (*_impl.h) are written once for both.
+// The backend seam: where a simulation's state lives and its kernels run. The choice is made once,
+// when the object that owns the state is built: a simulation engine (simulation_engine.h: the spring
+// engine, the FEM engine), FemExplicitDynamics, or a solve that moves its work to the device
+// (solve_fem_static); they take a Backend and dispatch, after checking their arguments once (STYLE.md
+// rule 5, Open3D's device dispatch). Functions over host arrays (a spring step, a probe, a cut, moving
+// a surface, FEM forces) take no Backend: they run on the CPU, and on a device the same kernels
+// (kernels/*_impl.h, written once) run inside DeviceSimulation and the FEM's device classes.
 #pragma once
 
 #include <cstdint>
@@ -43,14 +46,10 @@ bool backend_available(Backend backend);
 // "cuda" where it is not available.
 Backend resolve_backend(const std::string& name, const std::string& where = "backend");
 
-// Throws InputError(where, "backend", "...") unless the dispatcher `where`, which works on host
-// arrays (step, probe_sphere, move_surface, ...), can run `backend`. That is cpu always, and cuda
-// never (FemExplicitDynamics and solve_fem_static call it only where cuda cannot run, and run on the
-// device otherwise): without CUDA the message says so ("cuda was asked for but this build has no
-// CUDA kernels (CTSURG_CUDA is OFF or nvcc was absent at configure time); use cpu or auto", or "... but
-// no CUDA device was found ..."); with a device it names DeviceSimulation (device_simulation.h), the
-// CUDA backend, which keeps the state on the device. Every dispatcher calls it first, so asking for
-// cuda never runs the CPU silently.
+// Throws InputError(where, "backend", "...") when `backend` cannot run here, saying why: "cuda was
+// asked for but this build has no CUDA kernels (CTSURG_CUDA is OFF or nvcc was absent at configure
+// time); use cpu or auto", or "... but no CUDA device was found ...". Everything that takes a Backend
+// calls it (or resolve_backend) before any work, so asking for cuda never runs the CPU silently.
 void require_backend(Backend backend, const std::string& where);
 
 }  // namespace ctsurg::sim

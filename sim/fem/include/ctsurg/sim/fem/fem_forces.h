@@ -9,7 +9,6 @@
 // Units: displacements #N x 3 mm (row-major), forces #N x 3 uN (= g mm/s^2), energy nJ, stiffness uN/mm.
 #pragma once
 
-#include "ctsurg/sim/base/backend.h"
 #include "ctsurg/sim/fem/fem_model.h"
 
 #include <array>
@@ -22,7 +21,7 @@ namespace ctsurg::sim {
 // of an inverted element (det F <= 0; its forces are taken as zero, never NaN), or -1. threads: 0 = auto.
 // Throws InputError("fem forces", "displacements", ...) on a size mismatch.
 int32_t fem_internal_forces(const FemModel& model, const std::vector<double>& displacements, std::vector<double>& forces,
-                            Backend backend = Backend::cpu, int threads = 0);
+                            int threads = 0);
 
 // Strain energy sum_e V_e psi(F_e), nJ; +infinity if a neo-Hookean element is inverted.
 double fem_strain_energy(const FemModel& model, const std::vector<double>& displacements);

@@ -7,7 +7,6 @@
 // Per-particle kernels: src/sphere_tools_impl.h. Units: LPS mm.
 #pragma once
 
-#include "ctsurg/sim/base/backend.h"
 #include "ctsurg/sim/base/particle_state.h"
 #include "ctsurg/sim/base/tool_shapes.h"
 
@@ -24,12 +23,10 @@ struct Grab {
 
 // The particles strictly inside the sphere (current positions) and their offsets. Throws
 // InputError("grab", "radius", ...) unless the radius is finite and > 0.
-Grab grab_particles_in_sphere(const ParticleState& state, const Sphere& tool, Backend backend = Backend::cpu,
-                              int threads = 0);
+Grab grab_particles_in_sphere(const ParticleState& state, const Sphere& tool, int threads = 0);
 // Sets every grabbed particle's current position to centre + offset (LPS mm).
-void apply_grab(ParticleState& state, const Grab& grab, const std::array<double, 3>& centre,
-                Backend backend = Backend::cpu, int threads = 0);
+void apply_grab(ParticleState& state, const Grab& grab, const std::array<double, 3>& centre, int threads = 0);
 // Projects the free particles inside the sphere onto its surface; returns how many moved.
-int64_t probe_sphere(ParticleState& state, const Sphere& tool, Backend backend = Backend::cpu, int threads = 0);
+int64_t probe_sphere(ParticleState& state, const Sphere& tool, int threads = 0);
 
 }  // namespace ctsurg::sim

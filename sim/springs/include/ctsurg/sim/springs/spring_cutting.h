@@ -10,7 +10,6 @@
 // Kernels: src/spring_cutting_impl.h (per particle for the grid, per spring for the explicit model).
 #pragma once
 
-#include "ctsurg/sim/base/backend.h"
 #include "ctsurg/sim/base/particle_state.h"
 #include "ctsurg/sim/base/tool_shapes.h"
 #include "ctsurg/sim/springs/explicit_spring_model.h"
@@ -23,9 +22,8 @@ namespace ctsurg::sim {
 
 // Returns the number of springs cut (each counted once). state has the model's particle count, else
 // InputError("cut", "state", ...).
-int64_t cut_springs_crossing_triangle(SpringGridModel& model, const ParticleState& state, const Triangle& blade,
-                                      Backend backend = Backend::cpu, int threads = 0);
+int64_t cut_springs_crossing_triangle(SpringGridModel& model, const ParticleState& state, const Triangle& blade, int threads = 0);
 int64_t cut_springs_crossing_triangle(ExplicitSpringModel& model, const ParticleState& state, const Triangle& blade,
-                                      Backend backend = Backend::cpu, int threads = 0);
+                                      int threads = 0);
 
 }  // namespace ctsurg::sim

@@ -8,7 +8,6 @@
 // thread from the old positions, in the same order of operations, whatever the partition.
 #pragma once
 
-#include "ctsurg/sim/base/backend.h"
 #include "ctsurg/sim/base/particle_state.h"
 #include "ctsurg/sim/springs/explicit_spring_model.h"
 #include "ctsurg/sim/springs/spring_grid_model.h"
@@ -33,10 +32,11 @@ struct ParticleNormals {
 // Advances `state` by one step of `parameters.dt` (state.advance() included: afterwards state.x is
 // x(t + dt)). When `normals` is given it receives the normals at the positions of time t.
 // state has #P = model.particle_count() particles. Throws InputError("step", field, ...) for a
-// mismatch or a parameter out of range (checked once per call), or for a backend not in this build.
+// mismatch or a parameter out of range (checked once per call). On the host's arrays, on the CPU; the
+// same step on a CUDA device is DeviceSimulation's (device_simulation.h), which keeps the state there.
 void step(const SpringGridModel& model, ParticleState& state, const StepParameters& parameters,
-          Backend backend = Backend::cpu, ParticleNormals* normals = nullptr);
+          ParticleNormals* normals = nullptr);
 void step(const ExplicitSpringModel& model, ParticleState& state, const StepParameters& parameters,
-          Backend backend = Backend::cpu, ParticleNormals* normals = nullptr);
+          ParticleNormals* normals = nullptr);
 
 }  // namespace ctsurg::sim

@@ -8,7 +8,6 @@
 // Units: mm, in the engine's local frame.
 #pragma once
 
-#include "ctsurg/sim/base/backend.h"
 #include "ctsurg/sim/base/particle_state.h"
 #include "ctsurg/sim/base/tool_shapes.h"
 #include "ctsurg/sim/surface/surface_coupling.h"
@@ -33,8 +32,7 @@ class EmbeddedSurface {
 
   // The vertices (#V x 3 mm; resized) where the nodes at `positions` put them; `rest` (#P x 3 mm): the
   // nodes' rest positions (move_surface in surface_coupling.h).
-  void move(const ParticleState& positions, const std::vector<Real>& rest, std::vector<float>& vertices, Backend backend,
-            int threads) const;
+  void move(const ParticleState& positions, const std::vector<Real>& rest, std::vector<float>& vertices, int threads) const;
   // Cuts along the blade triangle; `vertices` are the surface's now (move()) and `positions` the nodes'.
   // Returns the number of triangles removed.
   int64_t cut(const Triangle& blade, const std::vector<float>& vertices, const ParticleState& positions);

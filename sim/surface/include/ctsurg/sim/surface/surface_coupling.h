@@ -21,7 +21,6 @@
 
 #include "ctsurg/core/image_geometry.h"
 #include "ctsurg/core/surface_mesh_file.h"
-#include "ctsurg/sim/base/backend.h"
 #include "ctsurg/sim/base/particle_state.h"
 
 #include <cstdint>
@@ -49,8 +48,10 @@ SurfaceCoupling couple_surface(const SurfaceMesh& mesh, const ImageGeometry& lat
                                CouplingMode mode = CouplingMode::trilinear);
 
 // Writes the moved vertices (#V x 3 LPS mm, row-major, resized) from the particles' positions.
-// rest_positions: the model's (#P x 3). Parallel over vertices (OpenMP), deterministic.
+// rest_positions: the model's (#P x 3). On the host's arrays: parallel over vertices (OpenMP),
+// deterministic, whatever backend the model runs on (a model on a CUDA device copies its state back
+// first; DeviceSimulation also moves a surface on the device with the same kernel).
 void move_surface(const SurfaceCoupling& coupling, const ParticleState& state, const std::vector<Real>& rest_positions,
-                  std::vector<float>& vertices, Backend backend = Backend::cpu, int threads = 0);
+                  std::vector<float>& vertices, int threads = 0);
 
 }  // namespace ctsurg::sim
