@@ -90,6 +90,7 @@ StabilityReport FemEngine::step(const std::vector<ToolInput>& tools, int steps) 
   if (!dynamics_) throw RuntimeError(options_.where + ": the static FEM solver has no time steps (it solves each frame)");
   check_tools(tools);
   const double t_next = dynamics_->time() + dynamics_->dt();
+  if (holds_.captures(tools)) sync();  // a tool captures the nodes where they are now
   holds_.update_grabs(tools, t_next, u_, false, grab_nodes_, grab_displacements_);
   if (!grab_nodes_.empty()) {
     dynamics_->set_prescribed(grab_nodes_, grab_displacements_);

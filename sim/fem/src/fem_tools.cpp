@@ -35,6 +35,15 @@ FemToolHolds::Hold& FemToolHolds::hold(size_t tool) {
 
 bool FemToolHolds::engaged(size_t tool) const { return tool < holds_.size() && !holds_[tool].nodes.empty(); }
 
+bool FemToolHolds::captures(const std::vector<ToolInput>& tools) const {
+  for (size_t i = 0; i < tools.size(); ++i) {
+    if (tools[i].kind != ToolKind::grab && tools[i].kind != ToolKind::force) continue;
+    const bool held = i < holds_.size() && (!holds_[i].nodes.empty() || holds_[i].released);
+    if (tools[i].active && !held) return true;
+  }
+  return false;
+}
+
 void FemToolHolds::update_grabs(const std::vector<ToolInput>& tools, double t, const std::vector<double>& u,
                                 bool capture_at_start, std::vector<int32_t>& nodes, std::vector<double>& displacements) {
   nodes.clear();

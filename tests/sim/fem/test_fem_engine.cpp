@@ -127,6 +127,37 @@ TEST(FemEngine, DynamicGrabMovesTheEndAndIdleStepsGoInBatches) {
   EXPECT_EQ(v.size(), e.model().nodes.size());
 }
 
+// A grab that starts between two frames captures the nodes where they are then: under gravity the
+// bar's free end sags, and a grab that starts there holds it sagged (it used to capture at the
+// displacement of the last frame written: the rest state here, so the end jumped back up).
+TEST(FemEngine, DynamicGrabCapturesTheNodesWhereTheyAreNow) {
+  const auto sagging = [] {
+    FemModel m = test::fem_box_model(FemMaterialModel::neo_hookean, kCells, kSize);
+    FemEngineOptions o;
+    o.solver = FemSolver::dynamic;
+    o.mass_damping = 500;
+    o.gravity = {0, 0, -9810};
+    std::vector<int32_t> fixed = test::nodes_where(m, 0, 0.0);
+    return std::make_unique<FemEngine>(std::move(m), std::move(fixed), EmbeddedSurface(), Vec3{0, 0, 0}, o);
+  };
+  // Where the end is after 400 steps ...
+  auto reference = sagging();
+  ASSERT_TRUE(reference->step({}, 400).stable);
+  reference->sync();
+  const int32_t tip = test::nodes_where(reference->model(), 0, 8.0)[4];
+  const double sag = reference->displacements()[3 * static_cast<size_t>(tip) + 2];
+  ASSERT_LT(sag, -1e-3);
+  // ... is where a grab that starts then holds it (no frame was taken in between).
+  auto e = sagging();
+  ASSERT_TRUE(e->step({}, 400).stable);
+  ToolInput hold = grab_end({8, 1, 1 + sag});
+  hold.radius_mm = 0.5;
+  ASSERT_TRUE(e->step({hold}, 1).stable);
+  ASSERT_TRUE(e->step({hold}, 1).stable);
+  e->sync();
+  EXPECT_NEAR(e->displacements()[3 * static_cast<size_t>(tip) + 2], sag, 1e-4);
+}
+
 TEST(FemEngine, WhatTheFemDoesNotTakeIsRefusedWithTheField) {
   FemEngine e = static_engine(FemMaterialModel::linear, Backend::cpu);
   ToolInput blade;

@@ -66,7 +66,9 @@ TEST(FemTools, GrabHoldsTheCapturedDisplacementPlusTheTravelAndLetsGoForGood) {
   std::vector<ToolInput> tools{grab_at({4, 1, 1.25}, 0.5)};
   std::vector<int32_t> nodes;
   std::vector<double> d;
+  EXPECT_TRUE(holds.captures(tools));  // the caller fetches the current displacement for this update
   holds.update_grabs(tools, 0.1, u, false, nodes, d);
+  EXPECT_FALSE(holds.captures(tools));
   ASSERT_EQ(nodes, std::vector<int32_t>{tip});
   EXPECT_EQ(d, (std::vector<double>{0, 0, 0.25}));
   EXPECT_TRUE(holds.engaged(0));
@@ -85,6 +87,7 @@ TEST(FemTools, GrabHoldsTheCapturedDisplacementPlusTheTravelAndLetsGoForGood) {
   EXPECT_TRUE(nodes.empty());
   EXPECT_FALSE(holds.engaged(0));
   tools[0].active = true;
+  EXPECT_FALSE(holds.captures(tools));
   holds.update_grabs(tools, 0.4, u, false, nodes, d);
   EXPECT_TRUE(nodes.empty());
   EXPECT_EQ(notes.size(), 1u);

@@ -49,6 +49,9 @@ class FemToolHolds {
   const std::vector<double>& nodal_forces() const { return nodal_forces_; }
   // Whether tool `tool` holds nodes (a grab its capture, a force the nodes it loads).
   bool engaged(size_t tool) const;
+  // Whether an update with `tools` captures (a grab or force active that has not captured yet): the
+  // caller passes the nodes' current displacement then.
+  bool captures(const std::vector<ToolInput>& tools) const;
 
  private:
   struct Hold {
