@@ -38,7 +38,7 @@ FemEngine::FemEngine(FemModel model, std::vector<int32_t> fixed_nodes, EmbeddedS
   counts_.elements = model_.tet_count();
   counts_.fixed = static_cast<int64_t>(fixed_nodes_.size());
   if (options_.solver == FemSolver::dynamic) {
-    FemDynamicsOptions o;
+    FemDynamicsOptions o;  // the explicit dynamics' own options struct: every field it needs, from ours
     o.dt = options_.dt;
     o.safety_factor = options_.safety_factor;
     o.mass_damping = options_.mass_damping;

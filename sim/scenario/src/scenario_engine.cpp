@@ -55,6 +55,19 @@ std::vector<int32_t> fixed_particles(const Scenario& s, const std::vector<Real>&
   return {fixed.begin(), fixed.end()};
 }
 
+// The options every engine takes, from the scenario (the step is the engine's own business: the FEM's
+// is checked against its critical step first).
+EngineOptions engine_options(const Scenario& s, const std::function<void(const std::string&)>& note) {
+  EngineOptions o;
+  o.safety_factor = s.safety_factor;
+  o.mass_damping = s.damping_per_s;
+  o.gravity = s.gravity;
+  o.threads = s.threads;
+  o.where = s.file.string();
+  o.note = note;
+  return o;
+}
+
 // The surface file, and its vertices moved into the local frame (in double before rounding to float).
 struct LocalSurface {
   SurfaceMesh mesh;                // vertices and lattice in the local frame
@@ -131,14 +144,8 @@ ScenarioEngine spring_engine(const Scenario& s, Backend backend, const std::func
       if (t.kind == ToolKind::force) throw InputError(sfile, t.label, "force tools run on the cpu backend only; set backend: cpu");
     }
   }
-  SpringEngineOptions o;
+  EngineOptions o = engine_options(s, note);
   o.dt = s.dt_s;
-  o.safety_factor = s.safety_factor;
-  o.damping_per_s = s.damping_per_s;
-  o.gravity = s.gravity;
-  o.threads = s.threads;
-  o.where = sfile;
-  o.note = note;
   auto engine = std::make_unique<SpringEngine>(std::move(model), std::move(state), std::move(surface), origin, o, backend);
   const double critical = engine->counts().critical_dt_s;
   if (note) {
@@ -181,13 +188,8 @@ ScenarioEngine fem_engine(const Scenario& s, Backend backend, const std::functio
     surface = embed_in_tets(local.mesh, mesh, note);
   }
   FemEngineOptions o;
+  static_cast<EngineOptions&>(o) = engine_options(s, note);
   o.solver = s.fem_solver;
-  o.safety_factor = s.safety_factor;
-  o.mass_damping = s.damping_per_s;
-  o.gravity = s.gravity;
-  o.threads = s.threads;
-  o.where = sfile;
-  o.note = note;
   std::optional<FemCriticalStep> crit;
   if (s.fem_solver == FemSolver::dynamic) {
     crit = fem_critical_time_step(model, s.safety_factor);

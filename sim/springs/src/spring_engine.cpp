@@ -37,13 +37,25 @@ double shortest_spring(const SpringModel& model) {
   }, model);
 }
 
-StepParameters step_parameters(double dt, const SpringEngineOptions& o) {
+StepParameters step_parameters(double dt, const EngineOptions& o) {
   StepParameters p;
   p.dt = dt;
-  p.damping = std::min(0.99, o.damping_per_s * dt);
+  p.damping = std::min(0.99, o.mass_damping * dt);
   p.gravity = o.gravity;
   p.threads = o.threads;
   return p;
+}
+
+// The state's positions as #P x 3 rows.
+template <typename T>
+void interleave(const ParticleState& s, std::vector<T>& xyz) {
+  const size_t n = static_cast<size_t>(s.count());
+  xyz.resize(3 * n);
+  for (size_t i = 0; i < n; ++i) {
+    xyz[3 * i] = s.x[i];
+    xyz[3 * i + 1] = s.y[i];
+    xyz[3 * i + 2] = s.z[i];
+  }
 }
 
 std::string lps_text(const Vec3& local, const Vec3& origin) {
@@ -54,7 +66,7 @@ std::string lps_text(const Vec3& local, const Vec3& origin) {
 }  // namespace
 
 SpringEngine::SpringEngine(SpringModel model, ParticleState state, EmbeddedSurface surface, const Vec3& origin,
-                           const SpringEngineOptions& options, Backend backend)
+                           const EngineOptions& options, Backend backend)
     : model_(std::move(model)),
       state_(std::move(state)),
       surface_(std::move(surface)),
@@ -203,27 +215,13 @@ void SpringEngine::sweep_blade(const ToolInput& blade, const Vec3& from, const V
 
 void SpringEngine::sync() { stepper_->to_host(); }
 
-void SpringEngine::positions(std::vector<double>& xyz) const {
-  const size_t n = static_cast<size_t>(state_.count());
-  xyz.resize(3 * n);
-  for (size_t i = 0; i < n; ++i) {
-    xyz[3 * i] = state_.x[i];
-    xyz[3 * i + 1] = state_.y[i];
-    xyz[3 * i + 2] = state_.z[i];
-  }
-}
+void SpringEngine::positions(std::vector<double>& xyz) const { interleave(state_, xyz); }
 
 void SpringEngine::surface_vertices(std::vector<float>& xyz) {
-  if (!surface_.empty()) {
+  if (surface_.empty()) {
+    interleave(state_, xyz);  // no surface: the particles
+  } else {
     surface_.move(state_, rest_real_, xyz, options_.threads);
-    return;
-  }
-  const size_t n = static_cast<size_t>(state_.count());
-  xyz.resize(3 * n);
-  for (size_t i = 0; i < n; ++i) {
-    xyz[3 * i] = state_.x[i];
-    xyz[3 * i + 1] = state_.y[i];
-    xyz[3 * i + 2] = state_.z[i];
   }
 }
 

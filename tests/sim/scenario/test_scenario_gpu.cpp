@@ -27,6 +27,13 @@ namespace {
 
 void write_block(const fs::path& dir) { ctsurg::sim::test::write_block_files(dir, 16, 6, 6, 2.0); }
 
+// The largest |a_i - b_i| (mm) of two trajectories' vertex arrays of one size.
+double largest_difference(const std::vector<float>& a, const std::vector<float>& b) {
+  double worst = 0;
+  for (size_t i = 0; i < a.size(); ++i) worst = std::max(worst, std::abs(double(a[i]) - b[i]));
+  return worst;
+}
+
 const char* kScenario = R"(ctsurg_scenario: 1
 model: {kind: spring_grid, grid: grid.h5, surface: surface.h5}
 material: {preset: liver, damping_per_s: 20}
@@ -54,8 +61,7 @@ TEST(ScenarioGpu, CpuAndCudaGiveTheSameTrajectory) {
   EXPECT_EQ(rc.springs_cut, rg.springs_cut);
   EXPECT_EQ(c.topologies, g.topologies);
   ASSERT_EQ(c.vertices.size(), g.vertices.size());
-  double worst = 0;
-  for (size_t i = 0; i < c.vertices.size(); ++i) worst = std::max(worst, std::abs(double(c.vertices[i]) - g.vertices[i]));
+  const double worst = largest_difference(c.vertices, g.vertices);
   EXPECT_LT(worst, 1e-3);  // mm after 0.1 s
 }
 
@@ -79,8 +85,7 @@ output: {trajectory: out.h5, frame_interval_s: 0.01}
   s.backend = "cuda";
   const Trajectory g = run_scenario(s);
   ASSERT_EQ(c.vertices.size(), g.vertices.size());
-  double worst = 0;
-  for (size_t i = 0; i < c.vertices.size(); ++i) worst = std::max(worst, std::abs(double(c.vertices[i]) - g.vertices[i]));
+  const double worst = largest_difference(c.vertices, g.vertices);
   EXPECT_LT(worst, 1e-3);  // mm after 0.1 s
 }
 
@@ -125,7 +130,6 @@ output: {trajectory: out.h5, frame_interval_s: 0.025}
   s.backend = "cuda";
   const Trajectory g = run_scenario(s);
   ASSERT_EQ(c.vertices.size(), g.vertices.size());
-  double worst = 0;
-  for (size_t i = 0; i < c.vertices.size(); ++i) worst = std::max(worst, std::abs(double(c.vertices[i]) - g.vertices[i]));
+  const double worst = largest_difference(c.vertices, g.vertices);
   EXPECT_LT(worst, 1e-3);  // mm: both solve each frame to the same tolerance
 }

@@ -6,9 +6,8 @@
 // holds; what a spring engine does not do (a quasi-static solve) is refused.
 #include "ctsurg/sim/springs/spring_engine.h"
 
+#include "block_surface.h"
 #include "ctsurg/core/error.h"
-#include "ctsurg/mesh/lattice_padding.h"
-#include "ctsurg/mesh/marching_cubes.h"
 #include "ctsurg/sim/base/fixed_regions.h"
 #include "ctsurg/sim/springs/spring_calibration.h"
 #include "sim_test_models.h"
@@ -27,10 +26,7 @@ struct Bar {
 
 Bar bar() {
   const auto occ = test::block_occupancy(10, 3, 3, 2.0);
-  Volume<float> field(occ.geometry, 0.f);
-  for (size_t i = 0; i < occ.voxels.size(); ++i) field.voxels[i] = occ.voxels[i] ? 1.f : 0.f;
-  Material liver = material_preset("liver");
-  return {build_spring_grid_model(occ, calibrated_grid_material(liver, occ.geometry)), marching_cubes(pad_lattice(field, 0.f, 1), 0.5)};
+  return {build_spring_grid_model(occ, calibrated_grid_material(material_preset("liver"), occ.geometry)), test::block_surface(occ)};
 }
 
 SpringEngine engine(bool surface = true, std::vector<std::string>* notes = nullptr) {
@@ -39,8 +35,8 @@ SpringEngine engine(bool surface = true, std::vector<std::string>* notes = nullp
   fix_particles(state, particles_in_box(b.model.rest_positions, {{0, -100, -100}, {12.5, 100, 100}}));
   EmbeddedSurface s;
   if (surface) s = EmbeddedSurface(couple_surface(b.mesh, b.model.lattice, b.model.cells), b.mesh.triangles);
-  SpringEngineOptions o;
-  o.damping_per_s = 30;
+  EngineOptions o;
+  o.mass_damping = 30;
   o.where = "s.yaml";
   if (notes) o.note = [notes](const std::string& n) { notes->push_back(n); };
   return SpringEngine(std::move(b.model), std::move(state), std::move(s), {0, 0, 0}, o);

@@ -3,11 +3,10 @@
 // Shared by test_scenario_run.cpp, test_stress.cpp and test_scenario_gpu.cpp.
 #pragma once
 
+#include "block_surface.h"
 #include "ctsurg/core/occupancy_grid_file.h"
 #include "ctsurg/core/surface_mesh_file.h"
 #include "ctsurg/core/tet_mesh_file.h"
-#include "ctsurg/mesh/lattice_padding.h"
-#include "ctsurg/mesh/marching_cubes.h"
 #include "ctsurg/sim/fem/fem_box_mesh.h"
 #include "sim_test_models.h"
 #include "test_support.h"
@@ -32,7 +31,7 @@ inline void write_block_files(const std::filesystem::path& dir, int nx, int ny, 
   g.mask = g.label;
   g.label_names = {{1, "bar"}};
   write_occupancy_grid_file(dir / "grid.h5", g, ctsurg::test::test_provenance());
-  write_surface_mesh_file(dir / "surface.h5", marching_cubes(pad_lattice(g.fraction, 0.f, 1), 0.5),
+  write_surface_mesh_file(dir / "surface.h5", block_surface(g.fraction),
                           ctsurg::test::test_provenance());
 }
 

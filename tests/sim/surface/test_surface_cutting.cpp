@@ -4,8 +4,7 @@
 // particles (the incision opens); a blade beside the bar changes nothing.
 #include "ctsurg/sim/surface/surface_cutting.h"
 
-#include "ctsurg/mesh/lattice_padding.h"
-#include "ctsurg/mesh/marching_cubes.h"
+#include "block_surface.h"
 #include "sim_test_models.h"
 
 #include <gtest/gtest.h>
@@ -24,9 +23,7 @@ struct Bar {
 // 10 x 3 x 3 cells of 2 mm; cell centres x = 12 .. 30 mm.
 Bar bar() {
   const auto occ = test::block_occupancy(10, 3, 3, 2.0);
-  Volume<float> field(occ.geometry, 0.f);
-  for (size_t i = 0; i < occ.voxels.size(); ++i) field.voxels[i] = occ.voxels[i] ? 1.f : 0.f;
-  Bar b{build_spring_grid_model(occ, test::test_material()), marching_cubes(pad_lattice(field, 0.f, 1), 0.5), {}};
+  Bar b{build_spring_grid_model(occ, test::test_material()), test::block_surface(occ), {}};
   b.coupling = couple_surface(b.mesh, b.model.lattice, b.model.cells);
   return b;
 }

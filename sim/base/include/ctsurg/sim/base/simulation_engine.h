@@ -30,6 +30,7 @@
 
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -54,6 +55,17 @@ struct ToolInput {
   Vec3 start_centre{0, 0, 0};          //   quasi-static engine captures there
   std::vector<std::array<Vec3, 2>> sweeps;  // cut: straight segments (from, to) its centre swept
                                             //   since its last sweep, in order; empty: no cut now
+};
+
+// What every engine is built with (an engine adds its own: fem_engine.h's solver).
+struct EngineOptions {
+  double dt = 0;                           // s, a dynamic engine's step; 0 = safety_factor x the critical step
+  double safety_factor = 0.5;              // (0, 1]
+  double mass_damping = 0;                 // mass-proportional (Rayleigh) damping rate, 1/s (>= 0)
+  std::array<double, 3> gravity{0, 0, 0};  // mm/s^2, LPS
+  int threads = 0;                         // CPU threads, 0 = automatic
+  std::string where = "engine";            // names the run in messages (a scenario file)
+  std::function<void(const std::string&)> note;  // what the engine decides (captures...), for a log; may be empty
 };
 
 // What the model is, for reports.

@@ -41,15 +41,9 @@ namespace ctsurg::sim {
 
 enum class FemSolver { dynamic, static_equilibrium };  // explicit dynamics, or static Newton per frame
 
-struct FemEngineOptions {
+// EngineOptions' dt, safety_factor and mass_damping are the dynamic solver's (FemDynamicsOptions).
+struct FemEngineOptions : EngineOptions {
   FemSolver solver = FemSolver::dynamic;
-  double dt = 0;                           // dynamic: s; 0 = safety_factor x the critical step
-  double safety_factor = 0.5;              // dynamic
-  double mass_damping = 0;                 // dynamic: Rayleigh mass damping, 1/s
-  std::array<double, 3> gravity{0, 0, 0};  // mm/s^2, LPS
-  int threads = 0;                         // CPU threads, 0 = automatic
-  std::string where = "fem engine";        // names the run in messages (a scenario file)
-  std::function<void(const std::string&)> note;  // what the engine decides (captures, the factorisation)
 };
 
 class FemEngine final : public SimulationEngine {

@@ -45,27 +45,18 @@ namespace ctsurg::sim {
 
 using SpringModel = std::variant<SpringGridModel, ExplicitSpringModel>;
 
-struct SpringEngineOptions {
-  double dt = 0;                          // s; 0 = safety_factor x the critical step (stability.h)
-  double safety_factor = kDefaultSafetyFactor;
-  double damping_per_s = 0;               // mass-proportional damping rate alpha, 1/s: Verlet damping
-                                          //   min(0.99, alpha dt) per step
-  std::array<double, 3> gravity{0, 0, 0};  // mm/s^2, LPS
-  int threads = 0;                        // CPU threads, 0 = automatic
-  std::string where = "spring engine";    // names the run in messages (a scenario file)
-  std::function<void(const std::string&)> note;  // what the engine decides (captures), for a log; may be empty
-};
-
 class SpringStepper;  // where the state is stepped (src/spring_stepper.h: the CPU or a CUDA device)
 
 class SpringEngine final : public SimulationEngine {
  public:
   // model and state (its particles, with the fixed ones fixed: inverse mass 0) in the local frame whose
-  // origin is `origin` (LPS mm); surface: the surface the model carries (may be empty). Throws
+  // origin is `origin` (LPS mm); surface: the surface the model carries (may be empty). options.dt: 0 =
+  // safety_factor x the critical step (stability.h); options.mass_damping alpha gives the Verlet
+  // damping min(0.99, alpha dt) per step. Throws
   // InputError as critical_time_step for a model without springs, as step() for parameters out of
   // range, and as DeviceSimulation for cuda where it cannot run.
   SpringEngine(SpringModel model, ParticleState state, EmbeddedSurface surface, const Vec3& origin,
-               const SpringEngineOptions& options, Backend backend = Backend::cpu);
+               const EngineOptions& options, Backend backend = Backend::cpu);
   ~SpringEngine() override;
   // Not copied or moved: the state lives where its solvers point.
   SpringEngine(const SpringEngine&) = delete;
@@ -126,7 +117,7 @@ class SpringEngine final : public SimulationEngine {
   ParticleState state_;
   EmbeddedSurface surface_;
   Vec3 origin_;
-  SpringEngineOptions options_;
+  EngineOptions options_;
   std::vector<Real> rest_real_;  // the model's rest positions (#P x 3 mm), as the kernels read them
   std::vector<double> rest_;     // the same in double (exactly)
   CriticalStep critical_;
