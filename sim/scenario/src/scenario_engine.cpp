@@ -8,6 +8,7 @@
 #include "ctsurg/sim/base/fixed_regions.h"
 #include "ctsurg/sim/fem/fem_engine.h"
 #include "ctsurg/sim/fem/fem_explicit_dynamics.h"
+#include "ctsurg/sim/scenario/scenario_model.h"
 #include "ctsurg/sim/springs/spring_calibration.h"
 #include "ctsurg/sim/springs/spring_engine.h"
 #include "ctsurg/sim/surface/embedded_surface.h"
@@ -97,6 +98,7 @@ EmbeddedSurface embed_in_tets(const SurfaceMesh& surface, const TetMesh& mesh, c
 
 ScenarioEngine spring_engine(const Scenario& s, Backend backend, const std::function<void(const std::string&)>& note) {
   const std::string sfile = s.file.string();
+  const ModelInputs in = model_inputs(s);
   // The grid's centre sets the local frame, for every spring model (explicit springs from a tet mesh too).
   OccupancyGrid grid = read_occupancy_grid_file(s.grid);
   const auto& dims = grid.occupancy.geometry.dims;
@@ -110,7 +112,7 @@ ScenarioEngine spring_engine(const Scenario& s, Backend backend, const std::func
   std::optional<SpringGridModel> grid_model;
   std::optional<TetMesh> tetmesh;
   SpringModel model;
-  if (s.model == ModelKind::spring_grid || s.springs_from == SpringSource::grid) {
+  if (!in.tetmesh) {
     grid_model = build_spring_grid_model(grid, calibrated_grid_material(s.material, grid.occupancy.geometry, s.mass_from_fraction));
     if (s.model == ModelKind::spring_grid) {
       model = *grid_model;
@@ -130,7 +132,7 @@ ScenarioEngine spring_engine(const Scenario& s, Backend backend, const std::func
 
   ScenarioEngine r;
   EmbeddedSurface surface;
-  if (!s.surface.empty()) {
+  if (in.surface) {
     LocalSurface local = read_local_surface(s, origin);
     r.surface_lps_vertices = std::move(local.lps_vertices);
     if (grid_model) {
@@ -182,7 +184,7 @@ ScenarioEngine fem_engine(const Scenario& s, Backend backend, const std::functio
 
   ScenarioEngine r;
   EmbeddedSurface surface;
-  if (!s.surface.empty()) {
+  if (model_inputs(s).surface) {
     LocalSurface local = read_local_surface(s, origin);
     r.surface_lps_vertices = std::move(local.lps_vertices);
     surface = embed_in_tets(local.mesh, mesh, note);

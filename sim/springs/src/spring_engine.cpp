@@ -75,6 +75,10 @@ SpringEngine::SpringEngine(SpringModel model, ParticleState state, EmbeddedSurfa
       rest_real_(rest_of(model_)),
       rest_(rest_real_.begin(), rest_real_.end()),
       critical_(std::visit([&](const auto& m) { return critical_time_step(m, options_.safety_factor); }, model_)),
+      // A blade cuts once its centre has moved a quarter of the shortest spring (or reaches a keyframe
+      // or its end): a spring cannot slip between two sweeps, and sweeping every step would cost a pass
+      // over the model per step.
+      blade_sweep_mm_(0.25 * shortest_spring(model_)),
       params_(step_parameters(options_.dt > 0 ? options_.dt : critical_.dt, options_)),
       guard_(make_guard()) {
   if (static_cast<size_t>(state_.count()) * 3 != rest_real_.size()) {
@@ -105,11 +109,6 @@ StabilityGuard SpringEngine::make_guard() const {
 void SpringEngine::note(const std::string& text) const {
   if (options_.note) options_.note(text);
 }
-
-// The blade cuts once its centre has moved a quarter of the shortest spring (or reaches a keyframe or
-// its end): a spring cannot slip between two sweeps, and sweeping every step would cost a pass over
-// the model per step.
-double SpringEngine::blade_sweep_mm() const { return 0.25 * shortest_spring(model_); }
 
 StabilityReport SpringEngine::step(const std::vector<ToolInput>& tools, int steps) {
   for (int k = 0; k < steps; ++k) {

@@ -69,7 +69,7 @@ class SpringEngine final : public SimulationEngine {
   const Vec3& origin() const override { return origin_; }
   const std::vector<double>& rest_positions() const override { return rest_; }
   bool has_surface() const override { return !surface_.empty(); }
-  double blade_sweep_mm() const override;
+  double blade_sweep_mm() const override { return blade_sweep_mm_; }
 
   bool quasi_static() const override { return false; }
   double dt() const override { return params_.dt; }
@@ -121,6 +121,7 @@ class SpringEngine final : public SimulationEngine {
   std::vector<Real> rest_real_;  // the model's rest positions (#P x 3 mm), as the kernels read them
   std::vector<double> rest_;     // the same in double (exactly)
   CriticalStep critical_;
+  double blade_sweep_mm_;        // a quarter of the shortest spring (rest lengths do not change)
   StepParameters params_;
   StabilityGuard guard_;
   EngineCounts counts_;
