@@ -15,8 +15,10 @@ int32_t fem_forces(const FemElementView<double>& elements, const int32_t* offset
 int32_t fem_forces(const FemElementView<float>& elements, const int32_t* offsets, const int32_t* corners,
                    int32_t nodes, const float* u, float* corner_forces, float* forces, int threads);
 
-// Element tangent stiffnesses K (#T x 144) at u. Returns the lowest inverted element id or -1.
-int32_t fem_stiffness(const FemElementView<double>& elements, const double* u, double* k, int threads);
+// Element tangent stiffnesses K (#T x 144) at u. project: the material tangents of St. Venant-Kirchhoff
+// and Neo-Hookean elements are projected to positive semi-definite first (fem_tangent_projection.h), so
+// every K is. Returns the lowest inverted element id or -1.
+int32_t fem_stiffness(const FemElementView<double>& elements, const double* u, double* k, int threads, bool project = false);
 
 // One explicit step (fem_explicit_step_impl.h): element pass, node update. Returns the lowest inverted
 // element id or -1 (then nothing after the element pass is written) and sets *non_finite_node to the

@@ -55,9 +55,10 @@ FemEngine::FemEngine(FemModel model, std::vector<int32_t> fixed_nodes, EmbeddedS
     throw InputError(options_.where, "fixed", "a static FEM problem needs fixed nodes (the system is singular otherwise)");
   }
   bc_.fixed_nodes = fixed_nodes_;
-  static_options_.threads = options_.threads;
-  static_options_.load_steps = 1;
-  if (model_.material.model == FemMaterialModel::linear) {
+  FemStaticOptions newton = options_.newton;
+  newton.threads = options_.threads;
+  newton.initial_displacements.clear();
+  if (model_.material.model == FemMaterialModel::linear && newton.linear_solve != FemLinearSolve::iterative) {
     FemLinearSolverOptions lo;
     lo.threads = options_.threads;
     linear_ = std::make_unique<FemLinearStaticSolver>(model_, bc_, lo);
@@ -65,6 +66,8 @@ FemEngine::FemEngine(FemModel model, std::vector<int32_t> fixed_nodes, EmbeddedS
       options_.note("FEM linear static: stiffness factorised once (" + std::to_string(linear_->stats().factor_nonzeros) +
                     " non-zeros, " + std::to_string(linear_->stats().factor_seconds) + " s); each frame a condensed solve");
     }
+  } else {
+    static_solver_ = std::make_unique<FemStaticSolver>(model_, newton, backend_);
   }
 }
 
@@ -138,8 +141,7 @@ void FemEngine::equilibrium(const std::vector<ToolInput>& tools, double time) {
   } else {
     bc_.prescribed_nodes = grab_nodes_;
     bc_.prescribed_displacements = grab_displacements_;
-    if (solves_ > 0) static_options_.initial_displacements = u_;  // warm start from the previous frame
-    r = solve_fem_static(model_, bc_, loads, static_options_, backend_);
+    r = static_solver_->solve(bc_, loads, solves_ > 0 ? &u_ : nullptr);  // warm start from the previous frame
   }
   if (!r.report.converged) {
     throw RuntimeError(options_.where + ": the static FEM solve at t = " + std::to_string(time) +

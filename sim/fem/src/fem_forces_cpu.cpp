@@ -2,6 +2,7 @@
 // elements, then over nodes, static partitions. Every result is written by exactly one index, so
 // the bits do not depend on the thread count. Inverted elements are reduced to the lowest id.
 #include "fem_cpu_kernels.h"
+#include "fem_tangent_projection.h"
 
 #include "ctsurg/sim/base/parallel.h"
 
@@ -40,17 +41,26 @@ int32_t fem_forces(const FemElementView<float>& elements, const int32_t* offsets
   return forces_impl(elements, offsets, corners, nodes, u, corner_forces, forces, threads);
 }
 
-int32_t fem_stiffness(const FemElementView<double>& el, const double* u, double* k, int threads) {
+int32_t fem_stiffness(const FemElementView<double>& el, const double* u, double* k, int threads, bool project) {
   const int t = thread_count(threads, el.count / 8);
+  const bool projecting = project && (el.model == kFemStvk || el.model == kFemNeoHookean);
   int32_t first = INT32_MAX;
 #pragma omp parallel for schedule(static) num_threads(t) reduction(min : first)
   for (int32_t e = 0; e < el.count; ++e) {
-    double ue[12];
+    double ue[12], F[9], A[81], g[12];
     for (int a = 0; a < 4; ++a)
       for (int c = 0; c < 3; ++c) ue[3 * a + c] = u[3 * el.tets[4 * e + a] + c];
-    if (!fem_element_stiffness(el.model, el.mu, el.lambda, ue, el.dm_inverse + 9 * e, el.volume[e], k + 144 * static_cast<int64_t>(e)) &&
-        e < first)
-      first = e;
+    const double* B = el.dm_inverse + 9 * e;
+    double* K = k + 144 * static_cast<int64_t>(e);
+    fem_deformation_gradient(ue, B, F);
+    if (!fem_material_tangent(el.model, el.mu, el.lambda, F, A)) {
+      for (int i = 0; i < 144; ++i) K[i] = 0;
+      if (e < first) first = e;
+      continue;
+    }
+    if (projecting) project_tangent_psd(A);
+    fem_shape_gradients(B, g);
+    fem_stiffness_from_tangent(A, g, el.volume[e], K);
   }
   return first == INT32_MAX ? -1 : first;
 }

@@ -44,6 +44,9 @@ enum class FemSolver { dynamic, static_equilibrium };  // explicit dynamics, or 
 // EngineOptions' dt, safety_factor and mass_damping are the dynamic solver's (FemDynamicsOptions).
 struct FemEngineOptions : EngineOptions {
   FemSolver solver = FemSolver::dynamic;
+  // The static solver's Newton solves (fem_static_solver.h: the linear solve, tolerances, limits);
+  // threads and initial_displacements are the engine's.
+  FemStaticOptions newton;
 };
 
 class FemEngine final : public SimulationEngine {
@@ -109,8 +112,8 @@ class FemEngine final : public SimulationEngine {
   bool had_grab_ = false;
   // static
   std::unique_ptr<FemLinearStaticSolver> linear_;
+  std::unique_ptr<FemStaticSolver> static_solver_;
   FemBoundaryConditions bc_;
-  FemStaticOptions static_options_;
   double static_time_ = 0;
   int solves_ = 0, newton_ = 0, cg_ = 0;
   int64_t steps_ = 0;
