@@ -22,11 +22,12 @@ std::string rest_text(const double* p) {
   return s.str();
 }
 
+// The rest centroid of element e, LPS mm.
 std::array<double, 3> centroid(const FemModel& m, int32_t e) {
   std::array<double, 3> c{0, 0, 0};
   for (int a = 0; a < 4; ++a)
     for (int k = 0; k < 3; ++k) c[k] += m.nodes[3 * m.tets[4 * e + a] + k] / 4;
-  return c;
+  return fem_lps_point(m, c.data());
 }
 
 // The guard's messages (one text for both backends). time, step: before the failing step.
@@ -42,7 +43,7 @@ RuntimeError inverted_error(const FemModel& model, int32_t element, double time,
 
 RuntimeError non_finite_error(const FemModel& model, int32_t node, double time, double dt) {
   std::ostringstream m;
-  m << "fem dynamics: node " << node << " (rest " << rest_text(&model.nodes[3 * node])
+  m << "fem dynamics: node " << node << " (rest " << rest_text(fem_lps_point(model, &model.nodes[3 * node]).data())
     << ") got a non-finite displacement at t = " << time + dt << " s; the state before this step is kept "
     << "(suggested: dt <= " << 0.5 * dt << " s)";
   return RuntimeError(m.str());

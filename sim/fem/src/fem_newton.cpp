@@ -42,11 +42,11 @@ class EigenThreads {
 std::string element_text(const FemModel& model, int32_t e) {
   std::ostringstream s;
   s << "element " << e << " (rest centroid";
-  for (int c = 0; c < 3; ++c) {
-    double x = 0;
-    for (int a = 0; a < 4; ++a) x += model.nodes[3 * model.tets[4 * e + a] + c] / 4;
-    s << (c ? ", " : " (") << x;
-  }
+  double centroid[3] = {0, 0, 0};
+  for (int c = 0; c < 3; ++c)
+    for (int a = 0; a < 4; ++a) centroid[c] += model.nodes[3 * model.tets[4 * e + a] + c] / 4;
+  const auto lps = fem_lps_point(model, centroid);
+  for (int c = 0; c < 3; ++c) s << (c ? ", " : " (") << lps[c];
   s << ") mm)";
   return s.str();
 }
@@ -115,7 +115,7 @@ FemNewton::~FemNewton() = default;
 void FemNewton::set_held(const std::vector<uint8_t>& held, const std::vector<double>& target) {
   const int32_t n = m_.node_count();
   std::vector<uint8_t> h = held;
-  check_rigid_modes(m_, h, diag_, where_.c_str());
+  if (terms_.mass == 0) check_rigid_modes(m_, h, diag_, where_.c_str());  // inertia makes the system definite
   for (int32_t i = 0; i < n; ++i)  // nodes without tets have no stiffness: held where they are
     if (m_.node_offsets[i + 1] == m_.node_offsets[i]) h[3 * i] = h[3 * i + 1] = h[3 * i + 2] = 1;
   target_ = target;
@@ -127,9 +127,10 @@ void FemNewton::set_held(const std::vector<uint8_t>& held, const std::vector<dou
 void FemNewton::set_external(const std::vector<double>& external) { external_ = external; }
 
 void FemNewton::set_terms(FemNewtonTerms terms) {
+  // The tangent's coefficients change with the step length, and K_n with every step under stiffness damping.
+  if (terms.mass != terms_.mass || terms.stiffness_damping != 0 || terms_.stiffness_damping != 0) factor_current_ = false;
   terms_ = std::move(terms);
   damping_ready_ = false;
-  factor_current_ = false;  // the tangent's coefficients changed
 }
 
 void FemNewton::build_system() {
@@ -213,7 +214,8 @@ std::string FemNewton::node_of_column(int64_t column) const {
   if (column < 0 || column >= static_cast<int64_t>(free_component_.size())) return "column " + std::to_string(column);
   const int32_t d = free_component_[static_cast<std::size_t>(column)];
   std::ostringstream s;
-  s << "node " << d / 3 << " (rest " << m_.nodes[3 * (d / 3)] << ", " << m_.nodes[3 * (d / 3) + 1] << ", " << m_.nodes[3 * (d / 3) + 2]
+  const auto p = fem_lps_point(m_, &m_.nodes[3 * (d / 3)]);
+  s << "node " << d / 3 << " (rest " << p[0] << ", " << p[1] << ", " << p[2]
     << " mm), axis " << "xyz"[d % 3];
   return s.str();
 }
@@ -290,7 +292,9 @@ int32_t FemNewton::assemble(const std::vector<double>& u, bool project) {
   double sum = 0;
   for (const int64_t z : diagonal_) sum += values[z];
   mean_diagonal_ = diagonal_.empty() ? 1.0 : std::max(sum / static_cast<double>(diagonal_.size()), 1e-300);
-  factor_current_ = false;
+  // The linear law's tangent does not depend on u: a factor of it stays current (set_terms and
+  // build_system say when its coefficients or pattern change).
+  if (m_.material.model != FemMaterialModel::linear) factor_current_ = false;
   return inverted;
 }
 
@@ -449,7 +453,9 @@ bool FemNewton::newton(std::vector<double>& u, double s, FemStaticReport& rep, s
       failure = element_text(m_, inv) + " inverted at load factor " + std::to_string(s);
       return false;
     }
-    if (in_mm && !lifting && it == 0 && residual_small(r, rnorm)) return true;  // the residual's scale needs an assembly
+    // The residual's scale needs an assembly. Dynamics always take a step: at the predictor the inertia
+    // residual is zero, and a soft (bending) mode's elastic residual is far below mean(diag K) times its error.
+    if (in_mm && !lifting && it == 0 && terms_.mass == 0 && residual_small(r, rnorm)) return true;
     b = r;
     if (lifting) lift(gap, b);
     t0 = Clock::now();
@@ -479,7 +485,8 @@ bool FemNewton::newton(std::vector<double>& u, double s, FemStaticReport& rep, s
       }
       inverted = residual(trial, s, r_trial);
       if (inverted >= 0) continue;
-      if (lifting || r_trial.norm() < rnorm || linear) {
+      // A full step within the budget is taken whatever the residual does (at equilibrium, round-off decides).
+      if (lifting || r_trial.norm() < rnorm || linear || (in_mm && alpha == 1 && du.lpNorm<Eigen::Infinity>() <= o_.tolerance_mm)) {
         accepted = true;
         break;
       }

@@ -55,7 +55,8 @@ class FemNewton {
 
   // Held components (#N x 3 flags; nodes no tet uses are added) and their targets at load factor 1
   // (#N x 3 mm). Rebuilds the sparsity pattern and the factor's analysis only when the held set
-  // changed. Throws InputError(where, "boundary conditions", ...) when a rigid motion stays free.
+  // changed. Without inertia terms (set_terms first for dynamics) throws InputError(where, "boundary
+  // conditions", ...) naming the rigid motions that stay free.
   void set_held(const std::vector<uint8_t>& held, const std::vector<double>& target);
   // External forces at load factor 1: nodal forces plus the lumped weight (#N x 3 uN).
   void set_external(const std::vector<double>& external);

@@ -300,11 +300,32 @@ TEST(FemStaticSolver, MissingOrInsufficientBoundaryConditionsAreInputErrors) {
     FAIL();
   } catch (const InputError& e) {
     EXPECT_EQ(e.field(), "boundary conditions");
-    EXPECT_NE(std::string(e.what()).find("singular"), std::string::npos);
+    const std::string msg = e.what();
+    EXPECT_NE(msg.find("singular"), std::string::npos);
+    EXPECT_NE(msg.find("6 rigid motions free"), std::string::npos) << msg;
   }
-  FemBoundaryConditions collinear;  // three nodes on the x axis: the rotation about it stays free
+  // The free motions are named: three nodes on the x axis leave the rotation about it (the point is
+  // the axis's nearest to the mesh centre).
+  FemBoundaryConditions collinear;
   collinear.fixed_nodes = {0, 1, 2};
-  EXPECT_THROW(solve_fem_static(m, collinear, loads), InputError);
+  try {
+    solve_fem_static(m, collinear, loads);
+    FAIL();
+  } catch (const InputError& e) {
+    const std::string msg = e.what();
+    EXPECT_NE(msg.find("1 rigid motion free (rotation about the axis along x through (1.0, 0.0, 0.0) mm)"), std::string::npos) << msg;
+  }
+  // The x = 0 face held in x only (a roller) leaves the translations along y and z and the rotation about x.
+  FemBoundaryConditions roller;
+  for (int32_t i : nodes_where(m, 0, 0.0)) roller.fixed_components.push_back(3 * i);
+  try {
+    solve_fem_static(m, roller, loads);
+    FAIL();
+  } catch (const InputError& e) {
+    const std::string msg = e.what();
+    EXPECT_NE(msg.find("3 rigid motions free"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("rotation about the axis along x"), std::string::npos) << msg;
+  }
   FemBoundaryConditions bad;
   bad.fixed_nodes = {999};
   EXPECT_THROW(solve_fem_static(m, bad, loads), InputError);

@@ -13,6 +13,7 @@
 
 #include "ctsurg/sim/fem/fem_material.h"
 
+#include <array>
 #include <cstdint>
 #include <vector>
 
@@ -25,7 +26,7 @@ namespace ctsurg::sim {
 struct FemModel {
   FemMaterial material;
   LameParameters lame;
-  std::vector<double> nodes;         // #N x 3 rest positions, LPS mm, row-major
+  std::vector<double> nodes;         // #N x 3 rest positions, mm (LPS minus frame_origin), row-major
   std::vector<int32_t> tets;         // #T x 4 node ids, positively oriented
   std::vector<double> rest_volume;   // #T mm^3 (> 0)
   std::vector<double> dm_inverse;    // #T x 9, Dm^-1 row-major, 1/mm
@@ -33,6 +34,9 @@ struct FemModel {
   std::vector<int32_t> node_offsets; // #N + 1, CSR row starts into node_corners
   std::vector<int32_t> node_corners; // #T x 4 entries 4 e + corner (corner 0..3), each row sorted
   int32_t unused_nodes = 0;          // nodes no tet uses (held fixed by every solver)
+  // Where the nodes' frame sits in LPS mm: a scenario runs in a local frame near its model (LPS minus
+  // this), and messages that name a point add it back. {0, 0, 0} when nodes are LPS.
+  std::array<double, 3> frame_origin{0, 0, 0};
 
   int32_t node_count() const { return static_cast<int32_t>(nodes.size() / 3); }
   int32_t tet_count() const { return static_cast<int32_t>(tets.size() / 4); }
@@ -46,6 +50,11 @@ struct FemModel {
 FemModel build_fem_model(const std::vector<double>& nodes, const std::vector<int32_t>& tets, const FemMaterial& material);
 // The same from a ctsurg tet mesh (mesh.nodes, mesh.tets; labels are not used: one material).
 FemModel build_fem_model(const TetMesh& mesh, const FemMaterial& material);
+
+// A point of the nodes' frame (mm) in LPS mm, for messages: p + model.frame_origin.
+inline std::array<double, 3> fem_lps_point(const FemModel& model, const double* p) {
+  return {p[0] + model.frame_origin[0], p[1] + model.frame_origin[1], p[2] + model.frame_origin[2]};
+}
 
 // Total rest volume, mm^3, and total mass, g.
 double fem_total_volume(const FemModel& model);
