@@ -1,11 +1,15 @@
 #include "ctsurg/sim/fem/fem_engine.h"
 
 #include "ctsurg/core/error.h"
+#include "ctsurg/sim/base/parallel.h"
 #include "ctsurg/sim/fem/fem_forces.h"
+#include "ctsurg/sim/fem/kernels/fem_quadratic_element_impl.h"
 #include "fem_rigid_modes.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <map>
 #include <numeric>
 #include <utility>
 
@@ -24,6 +28,39 @@ std::vector<uint8_t> fixed_flags(int32_t nodes, const FemBoundaryConditions& sup
     flags[static_cast<size_t>(c / 3)] = 1;
   }
   return flags;
+}
+
+// For each surface vertex of `coupling` (slots 0..3: the corners of a linear tet, weights: barycentric),
+// the quadratic element with those corners and its 10 shape-function values there.
+void quadratic_surface(const FemModel& model, const SurfaceCoupling& coupling, std::vector<int32_t>& nodes, std::vector<double>& weights) {
+  std::map<std::array<int32_t, 4>, int32_t> element_of;
+  for (int32_t e = 0; e < model.tet_count(); ++e) {
+    std::array<int32_t, 4> key;
+    for (int a = 0; a < 4; ++a) key[a] = model.tets[10 * static_cast<size_t>(e) + a];
+    std::sort(key.begin(), key.end());
+    element_of.emplace(key, e);
+  }
+  const int64_t nv = coupling.vertex_count();
+  nodes.resize(10 * static_cast<size_t>(nv));
+  weights.resize(10 * static_cast<size_t>(nv));
+  for (int64_t v = 0; v < nv; ++v) {
+    std::array<int32_t, 4> key;
+    for (int a = 0; a < 4; ++a) key[a] = coupling.particles[8 * static_cast<size_t>(v) + a];
+    std::sort(key.begin(), key.end());
+    const auto it = element_of.find(key);
+    if (it == element_of.end()) throw InputError("fem engine", "surface", "vertex " + std::to_string(v) + " is not tied to a tet of the model");
+    const int32_t* t = &model.tets[10 * static_cast<size_t>(it->second)];
+    double l[4] = {0, 0, 0, 0};
+    for (int a = 0; a < 4; ++a)
+      for (int k = 0; k < 4; ++k)
+        if (coupling.particles[8 * static_cast<size_t>(v) + k] == t[a]) l[a] = coupling.weights[8 * static_cast<size_t>(v) + k];
+    double N[10];
+    fem_quadratic_shape(l, N);
+    for (int a = 0; a < 10; ++a) {
+      nodes[10 * static_cast<size_t>(v) + a] = t[a];
+      weights[10 * static_cast<size_t>(v) + a] = N[a];
+    }
+  }
 }
 
 }  // namespace
@@ -46,6 +83,7 @@ FemEngine::FemEngine(FemModel model, FemBoundaryConditions supports, EmbeddedSur
   counts_.fixed = std::count(held.begin(), held.end(), uint8_t{1});
   supports_.prescribed_nodes.clear();
   supports_.prescribed_displacements.clear();
+  if (model_.order == 2 && !surface_.empty()) quadratic_surface(model_, surface_.coupling(), quadratic_nodes_, quadratic_weights_);
   if (options_.solver == FemSolver::dynamic) {
     FemDynamicsOptions o;  // the explicit dynamics' own options struct: every field it needs, from ours
     o.dt = options_.dt;
@@ -89,7 +127,8 @@ FemEngine::FemEngine(FemModel model, FemBoundaryConditions supports, EmbeddedSur
       supported[3 * static_cast<size_t>(n) + 2] = 1;
   for (const int32_t c : supports_.fixed_components) supported[static_cast<size_t>(c)] = 1;
   const bool supports_hold = free_rigid_modes(model_, supported, fem_bounding_diagonal(model_)).empty();
-  if (model_.material.model == FemMaterialModel::linear && newton.linear_solve != FemLinearSolve::iterative && supports_hold) {
+  if (model_.material.model == FemMaterialModel::linear && model_.order == 1 && newton.linear_solve != FemLinearSolve::iterative &&
+      supports_hold) {
     FemLinearSolverOptions lo;
     lo.threads = options_.threads;
     linear_ = std::make_unique<FemLinearStaticSolver>(model_, bc_, lo);
@@ -235,6 +274,22 @@ void FemEngine::surface_vertices(std::vector<float>& xyz) {
   if (surface_.empty()) {
     xyz.resize(u_.size());
     for (size_t i = 0; i < xyz.size(); ++i) xyz[i] = static_cast<float>(rest[i] + u_[i]);
+    return;
+  }
+  if (!quadratic_nodes_.empty()) {
+    const std::vector<Real>& rv = surface_.rest_vertices();
+    const int64_t nv = surface_.vertex_count();
+    xyz.resize(3 * static_cast<size_t>(nv));
+#pragma omp parallel for schedule(static) num_threads(cpu::thread_count(options_.threads, static_cast<int32_t>(nv / 1024)))
+    for (int64_t v = 0; v < nv; ++v) {
+      double d[3] = {0, 0, 0};
+      for (int a = 0; a < 10; ++a) {
+        const size_t k = 10 * static_cast<size_t>(v) + a;
+        const size_t n = static_cast<size_t>(quadratic_nodes_[k]);
+        for (int c = 0; c < 3; ++c) d[c] += quadratic_weights_[k] * u_[3 * n + c];
+      }
+      for (int c = 0; c < 3; ++c) xyz[3 * static_cast<size_t>(v) + c] = static_cast<float>(rv[3 * static_cast<size_t>(v) + c] + d[c]);
+    }
     return;
   }
   for (size_t i = 0; i < static_cast<size_t>(model_.node_count()); ++i) {

@@ -76,6 +76,7 @@ FemStepConstants step_constants(double dt, double mass_damping, const std::array
 FemCriticalStep fem_critical_time_step(const FemModel& model, double safety_factor) {
   if (!(safety_factor > 0 && safety_factor <= 1))
     throw InputError("fem critical step", "safety_factor", "must be in (0, 1], got " + std::to_string(safety_factor));
+  if (model.order != 1) throw InputError("fem critical step", "order", "the explicit dynamics runs linear tets only");
   FemCriticalStep cs;
   cs.safety_factor = safety_factor;
   cs.wave_speed = std::sqrt((model.lame.lambda + 2 * model.lame.mu) / model.material.density);
@@ -106,6 +107,8 @@ FemCriticalStep fem_critical_time_step(const FemModel& model, double safety_fact
 FemExplicitDynamics::FemExplicitDynamics(const FemModel& model, const FemDynamicsOptions& options, Backend backend)
     : model_(model), options_(options) {
   if (!backend_available(backend)) require_backend(backend, kWhere);  // cuda without a CUDA build or device: says why
+  if (model.order != 1)
+    throw InputError(kWhere, "order", "the explicit dynamics runs linear tets only (quadratic ones: the static or implicit solver)");
   const auto& o = options;
   if (!(o.mass_damping >= 0 && std::isfinite(o.mass_damping))) throw InputError(kWhere, "mass_damping", "must be finite and >= 0 (1/s)");
   for (double g : o.gravity)

@@ -20,9 +20,15 @@ int32_t forces_impl(const FemElementView<T>& elements, const int32_t* offsets, c
   int32_t first = INT32_MAX;
 #pragma omp parallel num_threads(t)
   {
+    if (elements.order == 2) {
 #pragma omp for schedule(static) reduction(min : first)
-    for (int32_t e = 0; e < elements.count; ++e)
-      if (!fem_element_force_pass(elements, u, e, corner_forces) && e < first) first = e;
+      for (int32_t e = 0; e < elements.count; ++e)
+        if (!fem_quadratic_element_force_pass(elements, u, e, corner_forces) && e < first) first = e;
+    } else {
+#pragma omp for schedule(static) reduction(min : first)
+      for (int32_t e = 0; e < elements.count; ++e)
+        if (!fem_element_force_pass(elements, u, e, corner_forces) && e < first) first = e;
+    }
 #pragma omp for schedule(static)
     for (int32_t i = 0; i < nodes; ++i) fem_gather_node_force(offsets, corners, corner_forces, i, forces + 3 * i);
   }
@@ -41,10 +47,43 @@ int32_t fem_forces(const FemElementView<float>& elements, const int32_t* offsets
   return forces_impl(elements, offsets, corners, nodes, u, corner_forces, forces, threads);
 }
 
+namespace {
+
+// The quadratic element's 30 x 30 tangent by quadrature (fem_quadratic_element_impl.h); false when a
+// point's det F <= 0 (K = 0).
+bool quadratic_stiffness(const FemElementView<double>& el, const double* u, int32_t e, bool projecting, double* K) {
+  double ue[30];
+  for (int a = 0; a < 10; ++a)
+    for (int c = 0; c < 3; ++c) ue[3 * a + c] = u[3 * el.tets[10 * e + a] + c];
+  const double* B = el.dm_inverse + 9 * e;
+  for (int i = 0; i < 900; ++i) K[i] = 0;
+  for (int q = 0; q < 4; ++q) {
+    double l[4], G[30], F[9], A[81];
+    fem_quadratic_point(q, l);
+    fem_quadratic_gradients(B, l, G);
+    fem_quadratic_deformation_gradient(ue, G, F);
+    if (!fem_material_tangent(el.model, el.mu, el.lambda, F, A)) {
+      for (int i = 0; i < 900; ++i) K[i] = 0;
+      return false;
+    }
+    if (projecting) project_tangent_psd(A);
+    fem_add_stiffness_from_tangent(A, G, 10, 0.25 * el.volume[e], K);
+  }
+  return true;
+}
+
+}  // namespace
+
 int32_t fem_stiffness(const FemElementView<double>& el, const double* u, double* k, int threads, bool project) {
   const int t = thread_count(threads, el.count / 8);
   const bool projecting = project && (el.model == kFemStvk || el.model == kFemNeoHookean);
   int32_t first = INT32_MAX;
+  if (el.order == 2) {
+#pragma omp parallel for schedule(static) num_threads(t) reduction(min : first)
+    for (int32_t e = 0; e < el.count; ++e)
+      if (!quadratic_stiffness(el, u, e, projecting, k + 900 * static_cast<int64_t>(e)) && e < first) first = e;
+    return first == INT32_MAX ? -1 : first;
+  }
 #pragma omp parallel for schedule(static) num_threads(t) reduction(min : first)
   for (int32_t e = 0; e < el.count; ++e) {
     double ue[12], F[9], A[81], g[12];

@@ -51,6 +51,8 @@ struct FemLinearStaticSolver::Impl {
       : model(m), options(o), threads(o.threads > 0 ? o.threads : cpu::thread_count(0, m.tet_count())) {
     const auto t0 = Clock::now();
     const int32_t n = m.node_count();
+    if (m.order != 1)
+      throw InputError(kWhere, "order", "the condensed solver is for linear tets; quadratic ones solve with solve_fem_static");
     if (m.material.model != FemMaterialModel::linear)
       throw InputError(kWhere, "material", "the factorised solver is for the linear material only (its K is constant); use solve_fem_static for St. Venant-Kirchhoff or Neo-Hookean");
     if (!supports.prescribed_nodes.empty() || !supports.prescribed_displacements.empty())

@@ -44,7 +44,7 @@ std::string element_text(const FemModel& model, int32_t e) {
   s << "element " << e << " (rest centroid";
   double centroid[3] = {0, 0, 0};
   for (int c = 0; c < 3; ++c)
-    for (int a = 0; a < 4; ++a) centroid[c] += model.nodes[3 * model.tets[4 * e + a] + c] / 4;
+    for (int a = 0; a < 4; ++a) centroid[c] += model.nodes[3 * model.tets[static_cast<std::size_t>(model.nodes_per_element()) * e + a] + c] / 4;
   const auto lps = fem_lps_point(model, centroid);
   for (int c = 0; c < 3; ++c) s << (c ? ", " : " (") << lps[c];
   s << ") mm)";
@@ -103,11 +103,13 @@ FemNewton::FemNewton(const FemModel& model, const FemStaticOptions& options, Dev
   target_.assign(3 * static_cast<std::size_t>(n), 0.0);
   external_.assign(3 * static_cast<std::size_t>(n), 0.0);
   el_ = {model.tets.data(), model.dm_inverse.data(), model.rest_volume.data(), model.tet_count(),
-         static_cast<int32_t>(model.material.model), model.lame.mu, model.lame.lambda};
-  corner_.resize(12 * static_cast<std::size_t>(model.tet_count()));
+         static_cast<int32_t>(model.material.model), model.lame.mu, model.lame.lambda, model.order};
+  npe_ = model.nodes_per_element();
+  ne_ = 3 * npe_;
+  corner_.resize(static_cast<std::size_t>(ne_) * static_cast<std::size_t>(model.tet_count()));
   forces_.resize(3 * static_cast<std::size_t>(n));
-  check_allocation(static_cast<uint64_t>(model.tet_count()), 144 * sizeof(double), where_, "the element tangents");
-  kbuf_.resize(144 * static_cast<std::size_t>(model.tet_count()));
+  check_allocation(static_cast<uint64_t>(model.tet_count()), static_cast<uint64_t>(ne_ * ne_) * sizeof(double), where_, "the element tangents");
+  kbuf_.resize(static_cast<std::size_t>(ne_ * ne_) * static_cast<std::size_t>(model.tet_count()));
 }
 
 FemNewton::~FemNewton() = default;
@@ -146,8 +148,8 @@ void FemNewton::build_system() {
   // Pattern: rows of the free components, columns of the free components of the node's neighbours.
   std::vector<std::vector<int32_t>> neighbours(n);
   for (int32_t e = 0; e < t; ++e)
-    for (int a = 0; a < 4; ++a)
-      for (int b = 0; b < 4; ++b) neighbours[m_.tets[4 * e + a]].push_back(m_.tets[4 * e + b]);
+    for (int a = 0; a < npe_; ++a)
+      for (int b = 0; b < npe_; ++b) neighbours[m_.tets[npe_ * e + a]].push_back(m_.tets[npe_ * e + b]);
   std::vector<int> outer(free_count + 1, 0);
   std::vector<int> inner;
   for (int32_t i = 0; i < n; ++i) {
@@ -167,20 +169,22 @@ void FemNewton::build_system() {
   std::vector<double> zeros(nnz, 0.0);
   k_ = Eigen::Map<const SpMat>(free_count, free_count, nnz, outer.data(), inner.data(), zeros.data());
   // Element entry -> non-zero, then grouped per non-zero (counting sort: contributions in element order).
-  std::vector<int64_t> slot(144 * static_cast<std::size_t>(t), -1);
+  const std::size_t ne2 = static_cast<std::size_t>(ne_ * ne_);
+  check_allocation(static_cast<uint64_t>(t), 2 * ne2 * sizeof(int64_t), where_, "the assembly map");
+  std::vector<int64_t> slot(ne2 * static_cast<std::size_t>(t), -1);
   std::vector<int64_t> count(nnz + 1, 0);
   const int* ip = k_.innerIndexPtr();
   const int* op = k_.outerIndexPtr();
   for (int32_t e = 0; e < t; ++e)
-    for (int r = 0; r < 12; ++r) {
-      const int32_t row = free_index_[3 * m_.tets[4 * e + r / 3] + r % 3];
+    for (int r = 0; r < ne_; ++r) {
+      const int32_t row = free_index_[3 * m_.tets[npe_ * e + r / 3] + r % 3];
       if (row < 0) continue;
-      for (int c = 0; c < 12; ++c) {
-        const int32_t col = free_index_[3 * m_.tets[4 * e + c / 3] + c % 3];
+      for (int c = 0; c < ne_; ++c) {
+        const int32_t col = free_index_[3 * m_.tets[npe_ * e + c / 3] + c % 3];
         if (col < 0) continue;
         const int* p = std::lower_bound(ip + op[row], ip + op[row + 1], col);
         const int64_t z = p - ip;
-        slot[144 * static_cast<std::size_t>(e) + 12 * r + c] = z;
+        slot[ne2 * static_cast<std::size_t>(e) + static_cast<std::size_t>(ne_ * r + c)] = z;
         ++count[z + 1];
       }
     }
@@ -231,13 +235,13 @@ int32_t FemNewton::forces(const std::vector<double>& u, double s, std::vector<do
   if (terms_.stiffness_damping != 0 && damping_ready_) {
     // -c_b K_n (u - u_n), element by element (serial, in element order: deterministic).
     for (int32_t e = 0; e < m_.tet_count(); ++e) {
-      const int32_t* v = &m_.tets[4 * e];
-      double w[12];
-      for (int c = 0; c < 12; ++c) w[c] = u[3 * v[c / 3] + c % 3] - terms_.damping_origin[3 * v[c / 3] + c % 3];
-      const double* k = &kbuf_n_[144 * static_cast<std::size_t>(e)];
-      for (int r = 0; r < 12; ++r) {
+      const int32_t* v = &m_.tets[static_cast<std::size_t>(npe_) * e];
+      double w[30];
+      for (int c = 0; c < ne_; ++c) w[c] = u[3 * v[c / 3] + c % 3] - terms_.damping_origin[3 * v[c / 3] + c % 3];
+      const double* k = &kbuf_n_[static_cast<std::size_t>(ne_ * ne_) * e];
+      for (int r = 0; r < ne_; ++r) {
         double kw = 0;
-        for (int c = 0; c < 12; ++c) kw += k[12 * r + c] * w[c];
+        for (int c = 0; c < ne_; ++c) kw += k[ne_ * r + c] * w[c];
         out[3 * v[r / 3] + r % 3] -= terms_.stiffness_damping * kw;
       }
     }
@@ -398,21 +402,22 @@ void FemNewton::lift(const std::vector<double>& gap, Eigen::VectorXd& b) const {
   const int32_t t = m_.tet_count();
   const double cb = terms_.stiffness_damping;
   for (int32_t e = 0; e < t; ++e) {
-    const int32_t* v = &m_.tets[4 * e];
-    double g[12];
+    const int32_t* v = &m_.tets[static_cast<std::size_t>(npe_) * e];
+    double g[30];
     bool moving = false;
-    for (int c = 0; c < 12; ++c) {
+    for (int c = 0; c < ne_; ++c) {
       g[c] = gap[3 * v[c / 3] + c % 3];
       moving = moving || g[c] != 0;
     }
     if (!moving) continue;
-    const double* k = &kbuf_[144 * static_cast<std::size_t>(e)];
-    const double* kn = cb != 0 ? &kbuf_n_[144 * static_cast<std::size_t>(e)] : nullptr;
-    for (int r = 0; r < 12; ++r) {
+    const std::size_t ne2 = static_cast<std::size_t>(ne_ * ne_);
+    const double* k = &kbuf_[ne2 * e];
+    const double* kn = cb != 0 ? &kbuf_n_[ne2 * e] : nullptr;
+    for (int r = 0; r < ne_; ++r) {
       const int32_t row = free_index_[3 * v[r / 3] + r % 3];
       if (row < 0) continue;
       double kg = 0;
-      for (int c = 0; c < 12; ++c) kg += (kn ? k[12 * r + c] + cb * kn[12 * r + c] : k[12 * r + c]) * g[c];
+      for (int c = 0; c < ne_; ++c) kg += (kn ? k[ne_ * r + c] + cb * kn[ne_ * r + c] : k[ne_ * r + c]) * g[c];
       b[row] -= kg;
     }
   }

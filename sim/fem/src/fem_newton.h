@@ -100,6 +100,7 @@ class FemNewton {
   std::vector<double> target_, external_, corner_, forces_, all_forces_, kbuf_, kbuf_n_;
   FemNewtonTerms terms_;
   FemElementView<double> el_{};
+  int npe_ = 4, ne_ = 12;  // nodes and unknowns per element (quadratic: 10, 30)
   // The free components' system: pattern, each non-zero's element-matrix contributions, the diagonal's
   // positions, the component <-> free index maps.
   std::vector<int32_t> free_index_, free_component_;

@@ -56,7 +56,7 @@ FemStaticResult FemStaticSolver::solve(const FemBoundaryConditions& bc, const Fe
     }
   for (int32_t i = 0; i < n; ++i)
     for (int c = 0; c < 3; ++c)
-      external[3 * i + c] = (loads.forces.empty() ? 0.0 : loads.forces[3 * i + c]) + model_.node_mass[i] * loads.gravity[c];
+      external[3 * i + c] = (loads.forces.empty() ? 0.0 : loads.forces[3 * i + c]) + model_.node_load[i] * loads.gravity[c];
   FemNewton& newton = *newton_;
   newton.set_held(held, target);
   newton.set_external(external);

@@ -172,6 +172,7 @@ std::string describe_scenario(const Scenario& s) {
   if (s.model == ModelKind::fem) {
     j["material_law"] = fem_material_model_name(s.material_law);
     j["solver"] = s.fem_solver == FemSolver::dynamic ? "dynamic" : s.fem_solver == FemSolver::implicit ? "implicit" : "static";
+    j["elements"] = s.fem_order == 2 ? "quadratic" : "linear";
   }
   nlohmann::json inputs = nlohmann::json::object();
   const ModelInputs read = model_inputs(s);
@@ -207,7 +208,7 @@ Scenario parse_scenario(const std::string& text, const fs::path& file, const fs:
   s.name = top.has("name") ? top.child("name").text() : file.stem().string();
 
   const YamlField m = top.child("model");
-  m.only({"kind", "grid", "surface", "tetmesh", "springs_from", "coupling", "mass_from_fraction", "material_law", "solver"});
+  m.only({"kind", "grid", "surface", "tetmesh", "springs_from", "coupling", "mass_from_fraction", "material_law", "solver", "elements"});
   const std::string kind = m.child("kind").one_of({"spring_grid", "explicit_springs", "fem"});
   s.model = kind == "spring_grid" ? ModelKind::spring_grid : kind == "fem" ? ModelKind::fem : ModelKind::explicit_springs;
   if (s.model != ModelKind::fem || m.has("grid")) s.grid = resolve(base_dir, m.child("grid").text());
@@ -224,6 +225,12 @@ Scenario parse_scenario(const std::string& text, const fs::path& file, const fs:
   if (m.has("solver")) {
     const std::string solver = m.child("solver").one_of({"dynamic", "static", "implicit"});
     s.fem_solver = solver == "static" ? FemSolver::static_equilibrium : solver == "implicit" ? FemSolver::implicit : FemSolver::dynamic;
+  }
+  if (m.has("elements")) {
+    if (s.model != ModelKind::fem) m.child("elements").fail("only for kind: fem");
+    s.fem_order = m.child("elements").one_of({"linear", "quadratic"}) == std::string("quadratic") ? 2 : 1;
+    if (s.fem_order == 2 && s.fem_solver == FemSolver::dynamic)
+      m.child("elements").fail("quadratic tets need solver: static or implicit (the explicit dynamics runs linear tets)");
   }
   if (m.has("surface")) s.surface = resolve(base_dir, m.child("surface").text());
   if (m.has("springs_from")) {

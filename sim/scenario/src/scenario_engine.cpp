@@ -8,6 +8,7 @@
 #include "ctsurg/sim/base/fixed_regions.h"
 #include "ctsurg/sim/fem/fem_engine.h"
 #include "ctsurg/sim/fem/fem_explicit_dynamics.h"
+#include "ctsurg/sim/fem/kernels/fem_quadratic_element_impl.h"
 #include "ctsurg/sim/scenario/scenario_model.h"
 #include "ctsurg/sim/springs/spring_calibration.h"
 #include "ctsurg/sim/springs/spring_engine.h"
@@ -17,7 +18,6 @@
 
 #include <cmath>
 #include <optional>
-#include <set>
 
 namespace ctsurg::sim {
 namespace {
@@ -196,13 +196,30 @@ ScenarioEngine fem_engine(const Scenario& s, Backend backend, const std::functio
   material.youngs_modulus = s.material.youngs_modulus_pa;
   material.poisson_ratio = s.material.poisson_ratio;
   material.density = s.material.density;
-  FemModel model = build_fem_model(mesh, material);
+  FemModel model = s.fem_order == 2 ? build_quadratic_fem_model(mesh, material) : build_fem_model(mesh, material);
   model.frame_origin = {origin[0], origin[1], origin[2]};
   // Fixed regions: the rest positions in float (as the spring models select them), the fractions of
-  // the double-precision box.
+  // the double-precision box. A label holds the edge nodes of a quadratic model between its nodes.
   const std::vector<Real> rest_real(model.nodes.begin(), model.nodes.end());
-  const Held held =
-      fixed_particles(s, rest_real, bounds_of(model.nodes), origin, [&](uint16_t label) { return nodes_with_label(mesh, label); });
+  const auto with_label = [&](uint16_t label) {
+    std::vector<int32_t> ids = nodes_with_label(mesh, label);
+    if (model.order != 2) return ids;
+    std::vector<uint8_t> in(static_cast<size_t>(model.node_count()), 0);
+    for (const int32_t i : ids) in[static_cast<size_t>(i)] = 1;
+    for (int32_t e = 0; e < model.tet_count(); ++e) {
+      const int32_t* t = &model.tets[10 * static_cast<size_t>(e)];
+      for (int k = 0; k < 6; ++k) {
+        int a, b;
+        fem_quadratic_edge(k, a, b);
+        if (in[static_cast<size_t>(t[a])] && in[static_cast<size_t>(t[b])]) in[static_cast<size_t>(t[4 + k])] = 1;
+      }
+    }
+    ids.clear();
+    for (int32_t i = 0; i < model.node_count(); ++i)
+      if (in[static_cast<size_t>(i)]) ids.push_back(i);
+    return ids;
+  };
+  const Held held = fixed_particles(s, rest_real, bounds_of(model.nodes), origin, with_label);
   FemBoundaryConditions supports;
   supports.fixed_nodes = held.whole;
   supports.fixed_components = held.components;

@@ -236,6 +236,9 @@ TEST(Scenario, SolverSectionAxesAndTheNewFemModels) {
   expect_error(replaced(dynamic, ", axes: [z, x]", ""),
                "solver: only for kind: fem with solver: static or implicit");
   expect_error(replaced(base, "material_law: corotational", "material_law: hookean"), "model.material_law");
+  EXPECT_EQ(parse_scenario(replaced(base, "solver: implicit", "solver: implicit\n  elements: quadratic"), "f.yaml", "/b").fem_order, 2);
+  expect_error(replaced(dynamic, "solver: dynamic", "solver: dynamic\n  elements: quadratic"), "model.elements: quadratic tets need solver: static or implicit");
+  expect_error(replaced(base, "solver: implicit", "solver: implicit\n  elements: cubic"), "model.elements");
   expect_error(base + "tools:\n  - probe: {radius_mm: 2, path: [{t: 0, position_mm: [0, 0, 0]}]}\n", "probe needs solver: dynamic");
   // A spring model holds axes too (its particles' components); the solver section is FEM's only.
   const std::string springs =

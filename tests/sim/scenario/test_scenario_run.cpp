@@ -288,7 +288,8 @@ TEST(ScenarioRun, FemImplicitSettlesToTheStaticShapeAndCorotationalStaysCloseToN
   write_bar(dir.path());
   write_bar_tets(dir.path());
   const std::string time = "time:\n  duration_s: 0.5\n";
-  const Trajectory st = run_scenario(parse_scenario(fem_scenario("neo_hookean", "static", time), dir.path() / "s.yaml", dir.path()));
+  RunReport str;
+  const Trajectory st = run_scenario(parse_scenario(fem_scenario("neo_hookean", "static", time), dir.path() / "s.yaml", dir.path()), &str);
   RunReport ir;
   const auto implicit = parse_scenario(with(fem_scenario("neo_hookean", "implicit", time), "damping_per_s: 200", "damping_per_s: 5"),
                                        dir.path() / "s.yaml", dir.path());
@@ -305,6 +306,20 @@ TEST(ScenarioRun, FemImplicitSettlesToTheStaticShapeAndCorotationalStaysCloseToN
   const double d = worst_difference(st, co);
   EXPECT_GT(d, 1e-5);
   EXPECT_LT(d, 0.1);
+  // Quadratic tets (elements: quadratic): the same grab, the surface following the 10-node tets; the
+  // bar bends more freely than with locking linear tets, but not far off.
+  RunReport qr;
+  const Trajectory quad = run_scenario(
+      parse_scenario(with(fem_scenario("neo_hookean", "static", time), "material_law: neo_hookean", "material_law: neo_hookean\n  elements: quadratic"),
+                     dir.path() / "s.yaml", dir.path()),
+      &qr);
+  EXPECT_EQ(quad.model, "fem neo_hookean quadratic (static)");
+  EXPECT_GT(qr.particles, 2 * str.particles);  // the edge nodes
+  const double dq = worst_difference(st, quad);
+  std::printf("quadratic vs linear tets, 3 mm grab: %.3f mm apart on the surface\n", dq);
+  EXPECT_GT(dq, 1e-3);
+  EXPECT_LT(dq, 1.0);
+  EXPECT_GE(quad.metric("max_displacement")->values.back(), 3.0 - 1e-9);
   // The solver section: a 0.5 mm budget stops earlier and stays within it.
   const Trajectory loose = run_scenario(
       parse_scenario(fem_scenario("neo_hookean", "static", time) + "solver: {linear: iterative, tolerance_mm: 0.5}\n", dir.path() / "s.yaml",

@@ -24,6 +24,9 @@
 // solve, or the implicit dynamics' Newton iterations of all steps so far (cumulative: differences
 // between frames are per frame); 0 for the explicit dynamics.
 //
+// Quadratic (10-node) tets run static and implicit; the surface follows them with the quadratic shape
+// functions at each vertex's barycentric coordinates in its tet.
+//
 // Units: mm (local frame: LPS minus origin), s, g; forces uN, energies nJ.
 #pragma once
 
@@ -118,6 +121,10 @@ class FemEngine final : public SimulationEngine {
   std::vector<double> u_;           // #N x 3 mm
   std::vector<Real> rest_real_;     // #N x 3 mm, the rest positions as the surface kernel reads them
   ParticleState positions_;         // rest + u, for the surface
+  // Quadratic tets: each surface vertex follows its tet's 10 nodes with the quadratic shape functions
+  // at its barycentric coordinates (the surface's coupling gives the tet's corners and those).
+  std::vector<int32_t> quadratic_nodes_;   // #V x 10
+  std::vector<double> quadratic_weights_;  // #V x 10
   // dynamic: explicit or implicit
   std::optional<FemExplicitDynamics> dynamics_;
   std::unique_ptr<FemImplicitDynamics> implicit_;

@@ -97,6 +97,7 @@ struct Scenario {
   CouplingMode coupling = CouplingMode::trilinear;
   FemMaterialModel material_law = FemMaterialModel::neo_hookean;  // kind: fem
   FemSolver fem_solver = FemSolver::dynamic;                       // kind: fem
+  int fem_order = 1;  // kind: fem; elements: linear (1, 4-node tets) | quadratic (2, 10-node; static and implicit)
   bool mass_from_fraction = false;
   Material material;                // preset, possibly with explicit overrides
   double damping_per_s = 0;         // mass-proportional damping rate alpha, 1/s (Verlet factor alpha dt)
