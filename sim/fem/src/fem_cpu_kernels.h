@@ -15,6 +15,10 @@ int32_t fem_forces(const FemElementView<double>& elements, const int32_t* offset
 int32_t fem_forces(const FemElementView<float>& elements, const int32_t* offsets, const int32_t* corners,
                    int32_t nodes, const float* u, float* corner_forces, float* forces, int threads);
 
+// Element strain energies (nJ, #T; +inf for an element whose law needs det F > 0 and has det F <= 0)
+// at u; returns their sum in element order (deterministic for any thread count).
+double fem_strain_energy(const FemElementView<double>& elements, const double* u, double* element_energy, int threads);
+
 // Element tangent stiffnesses K (#T x 144; quadratic elements #T x 900) at u. project: the material tangents of St. Venant-Kirchhoff
 // and Neo-Hookean elements are projected to positive semi-definite first (fem_tangent_projection.h), so
 // every K is. Returns the lowest inverted element id or -1.

@@ -9,6 +9,7 @@
 #include <omp.h>
 
 #include <climits>
+#include <cmath>
 
 namespace ctsurg::sim::cpu {
 namespace {
@@ -102,6 +103,32 @@ int32_t fem_stiffness(const FemElementView<double>& el, const double* u, double*
     fem_stiffness_from_tangent(A, g, el.volume[e], K);
   }
   return first == INT32_MAX ? -1 : first;
+}
+
+double fem_strain_energy(const FemElementView<double>& el, const double* u, double* element_energy, int threads) {
+  const int t = thread_count(threads, el.count);
+#pragma omp parallel for schedule(static) num_threads(t)
+  for (int32_t e = 0; e < el.count; ++e) {
+    const double* B = el.dm_inverse + 9 * e;
+    double w;
+    if (el.order == 2) {
+      double ue[30];
+      for (int a = 0; a < 10; ++a)
+        for (int c = 0; c < 3; ++c) ue[3 * a + c] = u[3 * el.tets[10 * e + a] + c];
+      w = fem_quadratic_element_energy(el.model, el.mu, el.lambda, ue, B, el.volume[e]);
+    } else {
+      double ue[12], F[9];
+      for (int a = 0; a < 4; ++a)
+        for (int c = 0; c < 3; ++c) ue[3 * a + c] = u[3 * el.tets[4 * e + a] + c];
+      fem_deformation_gradient(ue, B, F);
+      const bool needs_positive_j = el.model == kFemNeoHookean || el.model == kFemCorotational;
+      w = needs_positive_j && !(det3(F) > 0) ? 1e30 : el.volume[e] * fem_energy_density(el.model, el.mu, el.lambda, F);
+    }
+    element_energy[e] = w >= 1e30 ? HUGE_VAL : w;
+  }
+  double sum = 0;
+  for (int32_t e = 0; e < el.count; ++e) sum += element_energy[e];
+  return sum;
 }
 
 int32_t fem_explicit_step(const FemElementView<Real>& elements, const FemNodeView& nodes, const FemStepConstants& constants,

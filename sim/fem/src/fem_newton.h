@@ -73,6 +73,9 @@ class FemNewton {
   // f_int + s f_ext (+ the dynamic terms) on every component (#N x 3 uN), at u. Returns the lowest
   // inverted element or -1.
   int32_t forces(const std::vector<double>& u, double s, std::vector<double>& out);
+  // The potential whose negative gradient is forces(): strain energy - s f_ext . u + the terms'
+  // (c_m/2 |u - y|_M^2 + c_b/2 |u - u_n|_{K_n}^2), nJ; +inf where an element is inverted.
+  double energy(const std::vector<double>& u, double s);
 
   bool direct() const { return direct_; }
   int64_t factor_bytes() const;
@@ -97,7 +100,7 @@ class FemNewton {
   int threads_;
   double diag_ = 1;             // bounding-box diagonal, mm
   std::vector<uint8_t> held_;   // #N x 3
-  std::vector<double> target_, external_, corner_, forces_, all_forces_, kbuf_, kbuf_n_;
+  std::vector<double> target_, external_, corner_, forces_, all_forces_, kbuf_, kbuf_n_, element_energy_;
   FemNewtonTerms terms_;
   FemElementView<double> el_{};
   int npe_ = 4, ne_ = 12;  // nodes and unknowns per element (quadratic: 10, 30)
