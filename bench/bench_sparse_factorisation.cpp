@@ -15,6 +15,7 @@
 #include <Eigen/CholmodSupport>
 #include <Eigen/SparseCholesky>
 #include <benchmark/benchmark.h>
+#include <dlfcn.h>
 
 #include <chrono>
 #include <map>
@@ -52,8 +53,17 @@ const SpMat& stiffness(int n) {
   return *slot;
 }
 
+// OpenBLAS on one thread, as the FEM's own factorisations run it (sim/fem/src/sparse_cholesky.cpp says
+// why): with its default thread per core, CHOLMOD's supernodal solves wait on a second core and a
+// loaded 2-core machine made them 100x slower. Looked up at run time, so that any BLAS links.
+void one_blas_thread() {
+  using SetThreads = void (*)(int);
+  if (const auto set = reinterpret_cast<SetThreads>(dlsym(RTLD_DEFAULT, "openblas_set_num_threads"))) set(1);
+}
+
 template <class Solver>
 void factorise(benchmark::State& state) {
+  one_blas_thread();
   const SpMat& K = stiffness(static_cast<int>(state.range(0)));
   Solver solver;
   const auto t0 = std::chrono::steady_clock::now();

@@ -3,6 +3,8 @@
 #   bench/run.sh                 build (Release) if needed, then run every section
 #   bench/run.sh render fem      only these sections (preprocess tetmesh surface sim render fem kidney accuracy);
 #                                the others in docs/benchmarks.md stay as they are
+#   BUILD=build-dev bench/run.sh fem        an existing build folder (brought up to date) instead of the release preset
+#   TVE_OUT=DIR bench/run.sh accuracy       the tables of a finished bench/time_vs_error.sh run in DIR, not a new run
 # Real volumes come from ../shared/data; a volume that is absent is left out of the table.
 # Wall times are the best of REPEAT runs (default 3); peak memory is the maximum resident set size
 # reported by GNU time for the whole process.
@@ -17,8 +19,14 @@ want() {  # want SECTION: true when SECTION was asked for (or nothing was: every
   for x in "${SECTIONS[@]}"; do [[ $x == "$1" ]] && return 0; done
   return 1
 }
-scripts/build.sh >/dev/null
-BIN=$ROOT/build/bin
+if [[ -n ${BUILD:-} ]]; then
+  cmake --build "$BUILD" >/dev/null
+  BIN=$(cd "$BUILD" && pwd)/bin
+else
+  BUILD=build
+  scripts/build.sh >/dev/null
+  BIN=$ROOT/build/bin
+fi
 DATA=$(cd "$ROOT/.." && pwd)/shared/data
 WORK=$(mktemp -d)
 trap 'rm -rf "$WORK"' EXIT
@@ -309,7 +317,13 @@ if want accuracy; then
     machine_line
     echo "date: $(date -u +%Y-%m-%d). Fastest configuration per RMS surface error budget; method, plots and"
     echo "the full CSV: docs/accuracy.md."
-    bench/time_vs_error.sh build build/time_vs_error | sed -n '/^####/,$p'
+    if [[ -n ${TVE_OUT:-} ]]; then
+      [[ -f $TVE_OUT/budgets.md ]] || { echo "bench/run.sh: no $TVE_OUT/budgets.md (run bench/time_vs_error.sh first)" >&2; exit 2; }
+      echo "Tables of the run that finished $(date -u -r "$TVE_OUT/budgets.md" '+%Y-%m-%d %H:%M UTC')."
+      sed -n '/^####/,$p' "$TVE_OUT/budgets.md"
+    else
+      bench/time_vs_error.sh "$BUILD" "$BUILD/time_vs_error" | sed -n '/^####/,$p'
+    fi
   } >"$acc"
   splice accuracy "$acc"
 fi

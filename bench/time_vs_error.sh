@@ -66,7 +66,7 @@ solver: {tolerance_mm: 0.01}
 EOF
     /usr/bin/time -f "%M %e" -o "$OUT/memory.time" "$BIN/ctsurg-sim" -v "$OUT/memory.yaml" 2>"$OUT/memory.log" >/dev/null
     read -r kib secs <"$OUT/memory.time"
-    nodes=$(grep -oE '[0-9]+ (nodes|particles)' "$OUT/memory.log" | head -1 | awk '{print $1}')
+    nodes=$(grep -oE '[0-9]+ nodes \(' "$OUT/memory.log" | head -1 | awk '{print $1}')
     echo "| $law $elements tets | h $v mm | ${nodes:-?} | $((kib / 1024)) | $secs |" >>"$OUT/budgets.md"
   done
   rm -f "$OUT/memory.yaml" "$OUT/memory.h5" "$OUT/memory.xdmf" "$OUT/memory.time"
