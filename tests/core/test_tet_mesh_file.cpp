@@ -118,6 +118,7 @@ TEST(TetMeshFile, ReadRejectsOtherFilesAndBadShapes) {
   {
     auto f = ctsurg::h5::File::create(dir / "other.h5");
     f.root().set_attribute("ctsurg_format", std::string("surface_mesh"));
+    f.close();
   }
   EXPECT_THROW(ctsurg::read_tet_mesh_file(dir / "other.h5"), ctsurg::InputError);
   EXPECT_THROW(ctsurg::read_tet_mesh_file(dir / "missing.h5"), ctsurg::InputError);
@@ -133,6 +134,7 @@ TEST(TetMeshFile, ReadRejectsOtherFilesAndBadShapes) {
     const std::array<uint64_t, 2> n3{3, 3}, t3{1, 3};
     g.write_dataset("nodes", nodes, n3);
     g.write_dataset("tets", tets, t3);
+    f.close();
   }
   try {
     ctsurg::read_tet_mesh_file(dir / "bad.h5");

@@ -23,6 +23,7 @@ TEST(VolumeHdf5, GeometryAndValuesRoundTripExactly) {
     auto f = h5::File::create(tmp / "v.h5");
     auto root = f.root();
     write_volume(root, "hu", v, {"HU", "HU"}, VoxelType::Int16);
+    f.close();
   }
   const auto f = h5::File::open(tmp / "v.h5");
   const auto back = read_volume<float>(f.root(), "hu");
