@@ -76,7 +76,8 @@ void check_sizes(const SurfaceMesh& m, const std::string& file) {
 
 }  // namespace
 
-void write_surface_mesh_file(const std::filesystem::path& path, const SurfaceMesh& mesh, const Provenance& provenance) {
+void write_surface_mesh_file(const std::filesystem::path& path, const SurfaceMesh& mesh, const Provenance& provenance,
+                             OutputUnit* unit) {
   check_sizes(mesh, path.string());
   const uint64_t nv = static_cast<uint64_t>(mesh.vertex_count()), nf = static_cast<uint64_t>(mesh.triangle_count());
   write_ctsurg_file(
@@ -127,7 +128,7 @@ void write_surface_mesh_file(const std::filesystem::path& path, const SurfaceMes
           s.set_attribute("normal_map_bits", static_cast<int64_t>(img.bits));
         }
       },
-      surface_xdmf(path.filename().string(), mesh.vertex_count(), mesh.triangle_count()));
+      surface_xdmf(path.filename().string(), mesh.vertex_count(), mesh.triangle_count()), unit);
 }
 
 SurfaceMesh read_surface_mesh_file(const std::filesystem::path& path) {

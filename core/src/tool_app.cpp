@@ -7,6 +7,7 @@
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 
+#include <csignal>
 #include <exception>
 #include <iostream>
 #include <new>
@@ -36,6 +37,10 @@ int run_tool(int argc, char** argv, const std::string& name, const std::string& 
   }
   spdlog::set_level(quiet ? spdlog::level::err : verbose ? spdlog::level::debug : spdlog::level::info);
   ProgressBar::set_globally_enabled(!quiet);
+
+  // A file-size limit (ulimit -f) would kill the process with SIGXFSZ, leaving its temporary
+  // files behind; ignored, the write fails with EFBIG and the writer reports it (checked_write.h).
+  std::signal(SIGXFSZ, SIG_IGN);
 
   ToolContext ctx{name, std::vector<std::string>(argv, argv + argc)};
   try {
