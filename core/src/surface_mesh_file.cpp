@@ -2,6 +2,7 @@
 
 #include "ctsurg/core/ctsurg_file.h"
 #include "ctsurg/core/error.h"
+#include "ctsurg/core/finite_values.h"
 #include "ctsurg/core/hdf5_file.h"
 
 #include <array>
@@ -50,6 +51,10 @@ void check_sizes(const SurfaceMesh& m, const std::string& file) {
     throw InputError(file, "/surface",
                      "optional per-vertex arrays (uvs, tangents, source_vertex) differ in length from the vertex array");
   }
+  require_finite(m.vertices, 3, file, "/surface/vertices");
+  require_finite(m.normals, 3, file, "/surface/normals");
+  require_finite(m.grid_weights, 8, file, "/surface/grid_weights");
+  require_finite(m.tangents, 4, file, "/surface/tangents");
   for (const float u : m.uvs) {
     if (!(u >= 0.0f && u <= 1.0f)) throw InputError(file, "/surface/uvs", "texture coordinates must lie in [0, 1]");
   }

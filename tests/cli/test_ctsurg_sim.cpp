@@ -7,7 +7,9 @@
 #include "test_support.h"
 
 #include <gtest/gtest.h>
+#include <hdf5.h>
 
+#include <cmath>
 #include <fstream>
 
 namespace fs = std::filesystem;
@@ -117,4 +119,29 @@ TEST(CtsurgSim, UnstableRunStopsWithAStepToTryAndKeepsTheOldOutput) {
   EXPECT_NE(r.output.find("unstable"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("dt <="), std::string::npos) << r.output;
   EXPECT_EQ(read_bytes(out), "an earlier result");
+}
+
+// Issue 17: a NaN surface vertex gave a NaN trajectory (docs/sim.md promises never). The surface is
+// refused where it enters, naming the dataset.
+TEST(CtsurgSim, ANanSurfaceVertexIsRefusedWhereItEnters) {
+  TempDir dir;
+  write_inputs(dir.path());
+  fs::create_directory(dir.path() / "out");
+  {
+    const hid_t file = H5Fopen((dir.path() / "surface.h5").c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
+    const hid_t ds = H5Dopen2(file, "/surface/vertices", H5P_DEFAULT);
+    const hid_t space = H5Dget_space(ds);
+    std::vector<float> v(static_cast<std::size_t>(H5Sget_simple_extent_npoints(space)));
+    ASSERT_GE(H5Dread(ds, H5T_NATIVE_FLOAT, H5S_ALL, H5S_ALL, H5P_DEFAULT, v.data()), 0);
+    v[7] = std::nanf("");
+    ASSERT_GE(H5Dwrite(ds, H5T_NATIVE_FLOAT, H5S_ALL, H5S_ALL, H5P_DEFAULT, v.data()), 0);
+    H5Sclose(space);
+    H5Dclose(ds);
+    H5Fclose(file);
+  }
+  write_text(dir.path() / "s.yaml", scenario());
+  const auto r = run_tool("ctsurg-sim", {(dir.path() / "s.yaml").string()});
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("/surface/vertices: NaN at row 2, column 1"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(dir.path() / "out" / "traj.h5"));
 }

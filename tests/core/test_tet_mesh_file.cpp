@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <fstream>
 #include <sstream>
 
@@ -146,3 +147,17 @@ TEST(TetMeshFile, ReadRejectsOtherFilesAndBadShapes) {
 }
 
 }  // namespace
+
+// Issue 17: NaN never crosses a stage boundary: a tet mesh with a non-finite node is not written.
+TEST(TetMeshFile, NonFiniteNodesAreRefused) {
+  TempDir dir;
+  ctsurg::TetMesh m = two_tets();
+  m.nodes[4] = std::nan("");
+  try {
+    ctsurg::write_tet_mesh_file(dir / "m.h5", m, test_provenance());
+    ADD_FAILURE() << "a NaN node was written";
+  } catch (const ctsurg::InputError& e) {
+    EXPECT_EQ(e.field(), "/tetmesh/nodes");
+  }
+  EXPECT_FALSE(std::filesystem::exists(dir / "m.h5"));
+}
