@@ -1,6 +1,7 @@
 #include "ctsurg/core/tool_app.h"
 
 #include "ctsurg/core/error.h"
+#include "ctsurg/core/memory_guard.h"
 #include "ctsurg/core/progress_bar.h"
 #include "ctsurg/core/version.h"
 
@@ -44,13 +45,15 @@ int run_tool(int argc, char** argv, const std::string& name, const std::string& 
 
   ToolContext ctx{name, std::vector<std::string>(argv, argv + argc)};
   try {
+    apply_memory_cap();
     run(ctx);
     return 0;
   } catch (const InputError& e) {
     spdlog::error("{}", e.what());
     return 2;
   } catch (const std::bad_alloc&) {
-    spdlog::error("out of memory");
+    const std::string cap = memory_cap_note();
+    spdlog::error("out of memory{}", cap.empty() ? std::string() : " (" + cap + ")");
     return 1;
   } catch (const std::exception& e) {
     spdlog::error("{}", e.what());

@@ -194,8 +194,9 @@ Volume<float> read_image_file(const fs::path& path, std::vector<std::string>* wa
   const fs::path readable = repaired.path().empty() ? path : repaired.path();
   const ImageFileInfo info = read_image_file_info(path, warnings);
   const int64_t count = info.geometry.voxel_count();
-  // The reader holds the file's own type and our float copy at the same time.
-  check_allocation(static_cast<uint64_t>(count), sizeof(float) * 2, path.string(), "dimensions");
+  // While reading, the file's own buffer (up to 8 bytes a voxel for float64/int64), ITK's float
+  // image and our float copy are held at once.
+  check_allocation(static_cast<uint64_t>(count), 8 + 2 * sizeof(float), path.string(), "dimensions");
 
   using Image = itk::Image<float, 3>;
   auto reader = itk::ImageFileReader<Image>::New();
@@ -203,6 +204,9 @@ Volume<float> read_image_file(const fs::path& path, std::vector<std::string>* wa
   reader->SetFileName(readable.string());
   try {
     reader->Update();
+  } catch (const itk::MemoryAllocationError&) {
+    const std::string cap = memory_cap_note();
+    throw RuntimeError(path.string() + ": voxel data: out of memory while reading" + (cap.empty() ? "" : " (" + cap + ")"));
   } catch (const itk::ExceptionObject& e) {
     throw InputError(path.string(), "voxel data", itk_reason(e));
   }

@@ -2,7 +2,6 @@
 
 #include "ctsurg/core/error.h"
 #include "ctsurg/core/hdf5_file.h"
-#include "ctsurg/core/memory_guard.h"
 #include "ctsurg/core/xdmf_sidecar.h"
 #include "test_support.h"
 
@@ -92,10 +91,4 @@ TEST(VolumeHdf5, NonFiniteVoxelsAreNeitherWrittenNorRead) {
     EXPECT_EQ(e.field(), "/hu/data");
     EXPECT_NE(e.problem().find("(3, 2, 1)"), std::string::npos) << e.what();
   }
-}
-
-TEST(MemoryGuard, RefusesWhatCannotFit) {
-  EXPECT_NO_THROW(check_allocation(1000, 4, "f", "dims"));
-  EXPECT_THROW(check_allocation(uint64_t{1} << 62, 8, "f", "dims"), InputError);  // overflows 2^64
-  EXPECT_THROW(check_allocation(available_memory_bytes(), 2, "f", "dims"), InputError);
 }
