@@ -13,6 +13,7 @@ int main(int argc, char** argv) {
   double slope = 0, intercept = 0;
   ctsurg::CtImportOptions options;
   CLI::Option *slope_opt = nullptr, *intercept_opt = nullptr;
+  bool data_anywhere = false;
   return ctsurg::run_tool(
       argc, argv, "ctsurg-import",
       "Import a CT scan (DICOM series folder, NIfTI .nii/.nii.gz, NRRD .nrrd/.nhdr, MetaImage .mha/.mhd) as an HU "
@@ -28,11 +29,15 @@ int main(int argc, char** argv) {
             ->check(CLI::IsMember({"resample", "keep"}));
         slope_opt = app.add_option("--rescale-slope", slope, "Non-DICOM input: HU = value x slope + intercept");
         intercept_opt = app.add_option("--rescale-intercept", intercept, "Non-DICOM input: HU = value x slope + intercept");
+        app.add_flag("--allow-data-outside", data_anywhere,
+                     "Read detached data files (MetaImage ElementDataFile, NRRD data file) that lie outside the "
+                     "header's folder; by default a header may only name files beside it");
       },
       [&](const ctsurg::ToolContext& ctx) {
         options.dicom.uneven = uneven == "keep" ? ctsurg::UnevenSlicePolicy::Keep : ctsurg::UnevenSlicePolicy::Resample;
         if (*slope_opt) options.rescale_slope = slope;
         if (*intercept_opt) options.rescale_intercept = intercept;
+        options.data_files_anywhere = data_anywhere;
         ctsurg::check_output_path(output);
         const ctsurg::CtImport ct = ctsurg::import_ct(input, options);
         for (const auto& w : ct.warnings) spdlog::warn("{}: {}", input, w);

@@ -5,6 +5,7 @@
 #include "ctsurg/core/provenance.h"
 #include "ctsurg/core/file_hash.h"
 #include "../preprocess/mhd_writer.h"
+#include "../preprocess/nifti_writer.h"
 #include "test_support.h"
 
 #include <gtest/gtest.h>
@@ -52,7 +53,7 @@ TEST(CtsurgImport, BadInputsExitTwoNameTheProblemAndWriteNothing) {
   std::ofstream(in / "empty" / "notes.txt") << "not dicom";
   expect_rejected({(in / "empty").string(), target}, "no DICOM", out.path());
   std::ofstream(in / "corrupt.nii") << std::string(500, '\x7f');
-  expect_rejected({(in / "corrupt.nii").string(), target}, "corrupt.nii: header", out.path());
+  expect_rejected({(in / "corrupt.nii").string(), target}, "corrupt.nii: sizeof_hdr", out.path());
   std::vector<float> v(27, 40.0f);
   v[13] = std::nanf("");
   expect_rejected({test::write_mhd(in.path(), "nan", 3, 3, 3, v).string(), target}, "non-finite value", out.path());
@@ -60,7 +61,7 @@ TEST(CtsurgImport, BadInputsExitTwoNameTheProblemAndWriteNothing) {
   expect_rejected({test::write_mhd(in.path(), "flat", 3, 3, 3, v, "1 0 1").string(), target}, "spacing", out.path());
   std::ofstream(in / "huge.mhd") << "ObjectType = Image\nNDims = 3\nDimSize = 200000 200000 200000\nElementSpacing = 1 1 "
                                     "1\nElementType = MET_SHORT\nElementDataFile = huge.raw\n";
-  expect_rejected({(in / "huge.mhd").string(), target}, "refused before allocating", out.path());
+  expect_rejected({(in / "huge.mhd").string(), target}, "more than 2^48", out.path());
   const auto good = test::write_mhd(in.path(), "good", 3, 3, 3, v);
   expect_rejected({good.string(), (out / "no" / "such" / "ct.h5").string()}, "does not exist", out.path());
   expect_rejected({good.string(), target, "--uneven-slices", "sideways"}, "--uneven-slices", out.path());
@@ -181,4 +182,81 @@ TEST(CtsurgImport, TheMemoryCapIsValidatedAndHolds) {
   EXPECT_GT(refused, 0) << "no cap was too small: the test does not test the cap";
   const auto ok = test::run_shell("CTSURG_MAX_MEMORY_MB=2000 " + tool + ct.string() + " " + (out / "ct.h5").string());
   EXPECT_EQ(ok.exit_code, 0) << ok.output;
+}
+
+// Issue 17: damaged NIfTI files imported silently (a cut file as zeros, a bad gzip CRC, NaN voxels
+// as 0 HU, pixdim 0 as 1 mm, a NaN qform mirrored, a broken magic as Analyze, a bad vox_offset), a
+// NaN sform crashed and an srow of -1.7e38 hung. Each is refused (exit 2) naming the field.
+TEST(CtsurgImport, DamagedNiftiFilesAreRefused) {
+  test::TempDir in, out;
+  const auto target = (out / "ct.h5").string();
+  test::NiftiSpec big;
+  big.dim = {3, 20, 20, 20, 1, 1, 1, 1};
+  const std::string good = test::nifti_bytes(big);
+  test::write_nifti_bytes(in / "cut.nii.gz", good.substr(0, good.size() / 2));
+  expect_rejected({(in / "cut.nii.gz").string(), target}, "cut.nii.gz: voxel data: the file is cut short", out.path());
+  test::write_nifti_bytes(in / "crc.nii.gz", good);
+  {
+    std::string gz = test::read_bytes(in / "crc.nii.gz");
+    gz[gz.size() - 6] = static_cast<char>(gz[gz.size() - 6] ^ 1);  // the stored CRC-32
+    std::ofstream(in / "crc.nii.gz", std::ios::binary) << gz;
+  }
+  expect_rejected({(in / "crc.nii.gz").string(), target}, "crc.nii.gz: gzip:", out.path());
+  const auto broken = [&](const char* name, auto change, const std::string& mention) {
+    test::NiftiSpec s;
+    change(s);
+    test::write_nifti(in / name, s);
+    expect_rejected({(in / name).string(), target}, mention, out.path());
+  };
+  broken("nan.nii", [](test::NiftiSpec& s) { s.values.assign(24, 0.0f), s.values[7] = std::nanf(""); }, "non-finite");
+  broken("pixdim.nii", [](test::NiftiSpec& s) { s.pixdim[1] = 0.0f; }, "pixdim[1]");
+  broken("qform.nii", [](test::NiftiSpec& s) { s.qform_code = 1, s.quatern[0] = std::nanf(""); }, "quatern_b/c/d");
+  broken("sform.nii", [](test::NiftiSpec& s) { s.srow[0] = std::nanf(""); }, "srow_x");
+  broken("srow.nii", [](test::NiftiSpec& s) { s.srow[0] = -1.7e38f; }, "srow_x");
+  broken("magic.nii", [](test::NiftiSpec& s) { s.magic = std::string("ab1\0", 4); }, "magic");
+  broken("offset.nii", [](test::NiftiSpec& s) { s.vox_offset = 340; }, "vox_offset");
+}
+
+// Issue 17: MetaImage read errors were ignored, ElementDataFile could name any file, DimSize 2^32
+// crashed and NDims 1,000,000 hung.
+TEST(CtsurgImport, DamagedMetaImageFilesAreRefused) {
+  test::TempDir in, out, elsewhere;
+  const auto target = (out / "ct.h5").string();
+  test::write_mhd(in.path(), "short", 3, 3, 3, std::vector<float>(20, 40.0f));
+  expect_rejected({(in / "short.mhd").string(), target}, "short.mhd: ElementDataFile: the voxel data are cut short", out.path());
+  test::write_mhd(elsewhere.path(), "data", 3, 3, 3, std::vector<float>(27, 40.0f));
+  std::ofstream(in / "far.mhd") << "ObjectType = Image\nNDims = 3\nDimSize = 3 3 3\nElementType = MET_FLOAT\n"
+                                << "ElementDataFile = " << (elsewhere / "data.raw").string() << "\n";
+  expect_rejected({(in / "far.mhd").string(), target}, "--allow-data-outside", out.path());
+  const auto r = test::run_tool("ctsurg-import", {(in / "far.mhd").string(), target, "--allow-data-outside"});
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  fs::remove(out / "ct.h5");
+  fs::remove(out / "ct.xdmf");
+  std::ofstream(in / "big.mhd") << "NDims = 3\nDimSize = 4294967296 4294967296 4294967296\nElementType = MET_SHORT\n"
+                                << "ElementDataFile = big.raw\n";
+  std::ofstream(in / "big.raw") << "xx";
+  expect_rejected({(in / "big.mhd").string(), target}, "big.mhd: DimSize", out.path());
+  std::ofstream(in / "ndims.mhd") << "NDims = 1000000\nDimSize = 3 3 3\nElementType = MET_SHORT\nElementDataFile = big.raw\n";
+  expect_rejected({(in / "ndims.mhd").string(), target}, "ndims.mhd: NDims", out.path());
+}
+
+// Issue 17: library noise was printed before ctsurg's error, and errors named a temporary copy of a
+// repaired NRRD header instead of the user's file.
+TEST(CtsurgImport, OneMessageNamingTheUsersFile) {
+  test::TempDir in, out;
+  test::write_nifti_bytes(in / "noisy.nii", test::nifti_bytes({}).substr(0, 300));
+  auto r = test::run_tool("ctsurg-import", {(in / "noisy.nii").string(), (out / "ct.h5").string()});
+  EXPECT_EQ(r.exit_code, 2);
+  std::istringstream lines(r.output);
+  for (std::string line; std::getline(lines, line);) {
+    EXPECT_EQ(line.rfind("ctsurg-import: ", 0), 0u) << "a line that is not ctsurg's: " << line;
+  }
+  std::ofstream(in / "scan.nhdr") << "NRRD0004\ntype: short\ndimension: 3\nspace: left-posterior-superior\n"
+                                  << "sizes: 4 4 4\nspacings: 1 1 1\nencoding: raw\nendian: little\n"
+                                  << "data file: scan.raw\n";
+  std::ofstream(in / "scan.raw") << std::string(20, '\0');  // 128 bytes needed
+  r = test::run_tool("ctsurg-import", {(in / "scan.nhdr").string(), (out / "ct.h5").string()});
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find((in / "scan.nhdr").string()), std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find("ctsurg-nrrd-"), std::string::npos) << "names the temporary copy: " << r.output;
 }
