@@ -40,7 +40,18 @@ CtImport import_ct(const fs::path& input, const CtImportOptions& options) {
     if (options.rescale_slope || options.rescale_intercept) {
       const double slope = options.rescale_slope.value_or(1.0), intercept = options.rescale_intercept.value_or(0.0);
       if (!std::isfinite(slope) || slope == 0.0) throw InputError(input.string(), "--rescale-slope", "must be finite and non-zero");
-      for (float& v : out.volume.hu.voxels) v = static_cast<float>(v * slope + intercept);
+      if (!std::isfinite(intercept)) throw InputError(input.string(), "--rescale-intercept", "must be finite");
+      for (float& v : out.volume.hu.voxels) {
+        const double hu = v * slope + intercept;
+        // Beyond float range the volume would hold infinities; a CT spans a few thousand HU.
+        if (!(std::abs(hu) <= 1e6)) {
+          std::ostringstream m;
+          m << "gives " << hu << " HU for the stored value " << v << " (slope " << slope << ", intercept " << intercept
+            << "): outside +-1e6 HU, not a CT";
+          throw InputError(input.string(), "--rescale-slope/--rescale-intercept", m.str());
+        }
+        v = static_cast<float>(hu);
+      }
       out.volume.source["rescale"] = {{"slope", slope}, {"intercept", intercept}};
     }
   }

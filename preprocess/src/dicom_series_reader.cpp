@@ -11,6 +11,7 @@
 #include "ctsurg/preprocess/dicom_series_reader.h"
 
 #include "ctsurg/core/error.h"
+#include "ctsurg/core/library_messages.h"
 #include "ctsurg/core/memory_guard.h"
 #include "ctsurg/core/progress_bar.h"
 #include "ctsurg/preprocess/slice_stack.h"
@@ -32,7 +33,8 @@ namespace {
 const gdcm::Tag kSeriesUid(0x0020, 0x000e), kSeriesNumber(0x0020, 0x0011), kDescription(0x0008, 0x103e),
     kModality(0x0008, 0x0060), kImageType(0x0008, 0x0008), kPosition(0x0020, 0x0032), kOrientation(0x0020, 0x0037),
     kRows(0x0028, 0x0010), kColumns(0x0028, 0x0011), kPixelSpacing(0x0028, 0x0030), kFrames(0x0028, 0x0008),
-    kTransferSyntax(0x0002, 0x0010), kPixelData(0x7fe0, 0x0010);
+    kTransferSyntax(0x0002, 0x0010), kPixelData(0x7fe0, 0x0010), kSamplesPerPixel(0x0028, 0x0002),
+    kBitsAllocated(0x0028, 0x0100);
 
 std::string trim(std::string s) {
   while (!s.empty() && (s.back() == ' ' || s.back() == '\0')) s.pop_back();
@@ -76,6 +78,7 @@ struct SliceHeader {
   fs::path file;
   Eigen::Vector3d position, row_dir, col_dir;
   int rows = 0, columns = 0;
+  int bits_allocated = 16, samples_per_pixel = 1;
   double row_spacing = 0, column_spacing = 0;
 };
 
@@ -105,9 +108,21 @@ SliceHeader slice_header(const gdcm::Scanner& scan, const fs::path& file) {
     m << "spacing must be positive, got " << spacing[0] << "\\" << spacing[1];
     throw InputError(file.string(), "PixelSpacing (0028,0030)", m.str());
   }
+  if (!(rows[0] >= 1 && rows[0] <= 65535 && cols[0] >= 1 && cols[0] <= 65535)) {
+    throw InputError(file.string(), "Rows/Columns", "must be whole numbers 1 .. 65535 (US, PS3.5 6.2)");
+  }
   h.rows = static_cast<int>(rows[0]);
   h.columns = static_cast<int>(cols[0]);
-  if (h.rows < 1 || h.columns < 1) throw InputError(file.string(), "Rows/Columns", "image has no pixels");
+  const auto bits = parse_numbers(scan.GetValue(name, kBitsAllocated), 1, file, "BitsAllocated (0028,0100)");
+  if (bits[0] != 8 && bits[0] != 16 && bits[0] != 32) {
+    throw InputError(file.string(), "BitsAllocated (0028,0100)", "must be 8, 16 or 32 for a CT image");
+  }
+  h.bits_allocated = static_cast<int>(bits[0]);
+  if (const char* samples = scan.GetValue(name, kSamplesPerPixel)) {
+    if (parse_numbers(samples, 1, file, "SamplesPerPixel (0028,0002)")[0] != 1) {
+      throw InputError(file.string(), "SamplesPerPixel (0028,0002)", "must be 1: a CT image is greyscale");
+    }
+  }
   return h;
 }
 
@@ -146,20 +161,37 @@ void check_pixel_data_complete(const SliceHeader& h) {
                      "truncated file: pixel data needs " + std::to_string(length) + " bytes, the file holds " +
                          std::to_string(bytes.size() > start ? bytes.size() - start : 0));
   }
+  // Native pixel data hold Rows x Columns x BitsAllocated / 8 bytes (PS3.5 8.1.1); a header whose
+  // BitsAllocated claims more would make the decoder read past the element.
+  const uint64_t needed = uint64_t(h.rows) * uint64_t(h.columns) * uint64_t(h.samples_per_pixel) *
+                          uint64_t(h.bits_allocated) / 8;
+  if (length < needed) {
+    throw InputError(h.file.string(), "BitsAllocated (0028,0100)",
+                     "Rows x Columns x BitsAllocated / 8 = " + std::to_string(h.rows) + " x " + std::to_string(h.columns) +
+                         " x " + std::to_string(h.bits_allocated) + " / 8 = " + std::to_string(needed) +
+                         " bytes, but PixelData (7FE0,0010) holds " + std::to_string(length));
+  }
 }
 
 // Reads one slice file as float HU (ITK applies RescaleSlope/Intercept).
-std::vector<float> read_slice(const SliceHeader& h) {
+std::vector<float> read_slice(const SliceHeader& h, std::vector<std::string>* warnings) {
   check_pixel_data_complete(h);
   using Image = itk::Image<float, 3>;
   auto io = itk::GDCMImageIO::New();
   auto reader = itk::ImageFileReader<Image>::New();
   reader->SetImageIO(io);
   reader->SetFileName(h.file.string());
-  try {
-    reader->Update();
-  } catch (const itk::ExceptionObject& e) {
-    throw InputError(h.file.string(), "PixelData (7FE0,0010)", std::string("cannot decode: ") + e.GetDescription());
+  {
+    LibraryMessages said;
+    try {
+      reader->Update();
+    } catch (const itk::ExceptionObject& e) {
+      throw InputError(h.file.string(), "PixelData (7FE0,0010)",
+                       with_library_text(std::string("cannot decode: ") + e.GetDescription(), said.take()));
+    }
+    if (const std::string text = said.take(); !text.empty() && warnings) {
+      warnings->push_back(h.file.string() + ": the DICOM decoder said: " + text);
+    }
   }
   const Image* image = reader->GetOutput();
   const auto size = image->GetLargestPossibleRegion().GetSize();
@@ -280,7 +312,8 @@ DicomVolume read_dicom_series(const fs::path& folder, const DicomReadOptions& op
 
   // Re-scan the chosen series for geometry (cheap: headers only).
   gdcm::Scanner scan;
-  for (const auto& t : {kPosition, kOrientation, kRows, kColumns, kPixelSpacing, kFrames}) scan.AddTag(t);
+  for (const auto& t : {kPosition, kOrientation, kRows, kColumns, kPixelSpacing, kFrames, kBitsAllocated, kSamplesPerPixel})
+    scan.AddTag(t);
   std::vector<std::string> names;
   for (const auto& f : chosen->files) names.push_back(f.string());
   scan.Scan(names);
@@ -343,7 +376,7 @@ DicomVolume read_dicom_series(const fs::path& folder, const DicomReadOptions& op
     ProgressBar progress("reading DICOM slices", headers.size());
     for (std::size_t k = 0; k < headers.size(); ++k) {
       const SliceHeader& h = headers[static_cast<std::size_t>(stack.order[k])];
-      const auto values = read_slice(h);
+      const auto values = read_slice(h, &out.warnings);
       for (std::size_t p = 0; p < plane; ++p) {
         if (!std::isfinite(values[p])) {
           throw InputError(h.file.string(), "PixelData (7FE0,0010)",

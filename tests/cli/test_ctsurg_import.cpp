@@ -10,7 +10,9 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <fstream>
+#include <sstream>
 
 namespace fs = std::filesystem;
 using namespace ctsurg;
@@ -154,36 +156,6 @@ TEST(CtsurgImport, TiltAndUnevenSpacingAreWarnedWithNumbers) {
   EXPECT_NE(r.output.find("uneven slice spacing: gaps from 1.14"), std::string::npos) << r.output;
 }
 
-// Issue 17: CTSURG_MAX_MEMORY_MB=50 did not cap real use (197 MB import), bad values were ignored
-// and refusals exited 2 where docs/formats.md says 1.
-TEST(CtsurgImport, TheMemoryCapIsValidatedAndHolds) {
-  test::TempDir out;
-  const auto ct = test::source_dir() / "data_samples" / "heart" / "heart_ct.nii.gz";
-  const std::string tool = std::string(CTSURG_TOOL_DIR) + "/ctsurg-import ";
-  for (const char* bad : {"fifty", "0", "-1"}) {
-    const auto r = test::run_shell(std::string("CTSURG_MAX_MEMORY_MB=") + bad + " " + tool + ct.string() + " " +
-                                   (out / "ct.h5").string());
-    EXPECT_EQ(r.exit_code, 2) << r.output;
-    EXPECT_NE(r.output.find("CTSURG_MAX_MEMORY_MB"), std::string::npos) << r.output;
-  }
-  // Under any cap the import either fits (exit 0) or stops as out of memory (exit 1) naming the cap:
-  // never bad input, never a crash in a library that met the limit.
-  int refused = 0;
-  for (int mb = 8; mb <= 64; mb += 4) {
-    const std::string cap = "CTSURG_MAX_MEMORY_MB=" + std::to_string(mb);
-    const auto r = test::run_shell(cap + " " + tool + ct.string() + " " + (out / "ct.h5").string());
-    EXPECT_TRUE(r.exit_code == 0 || r.exit_code == 1) << cap << ": exit " << r.exit_code << "\n" << r.output;
-    if (r.exit_code == 1) {
-      ++refused;
-      EXPECT_NE(r.output.find(cap), std::string::npos) << r.output;
-      EXPECT_TRUE(test::files_in(out.path()).empty());
-    }
-  }
-  EXPECT_GT(refused, 0) << "no cap was too small: the test does not test the cap";
-  const auto ok = test::run_shell("CTSURG_MAX_MEMORY_MB=2000 " + tool + ct.string() + " " + (out / "ct.h5").string());
-  EXPECT_EQ(ok.exit_code, 0) << ok.output;
-}
-
 // Issue 17: damaged NIfTI files imported silently (a cut file as zeros, a bad gzip CRC, NaN voxels
 // as 0 HU, pixdim 0 as 1 mm, a NaN qform mirrored, a broken magic as Analyze, a bad vox_offset), a
 // NaN sform crashed and an srow of -1.7e38 hung. Each is refused (exit 2) naming the field.
@@ -240,6 +212,82 @@ TEST(CtsurgImport, DamagedMetaImageFilesAreRefused) {
   expect_rejected({(in / "ndims.mhd").string(), target}, "ndims.mhd: NDims", out.path());
 }
 
+// Issue 17: --rescale-slope 1e300 wrote an all-infinite volume.
+TEST(CtsurgImport, ARescaleBeyondFloatRangeIsRefused) {
+  test::TempDir in, out;
+  const auto src = test::write_mhd(in.path(), "ct", 3, 3, 3, std::vector<float>(27, 40.0f));
+  expect_rejected({src.string(), (out / "ct.h5").string(), "--rescale-slope", "1e300"}, "--rescale-slope", out.path());
+}
+
+// Issue 17: `ctsurg-import c.nii.gz c.nii.gz` replaced the CT with HDF5, and any output suffix was
+// accepted. The output is an .h5 file that is none of the inputs.
+TEST(CtsurgImport, TheOutputIsAnH5FileThatIsNotAnInput) {
+  test::TempDir in;
+  const auto ct = test::write_nifti(in / "c.nii.gz", {});
+  const std::string before = test::read_bytes(ct);
+  for (const auto& output : {ct, in / "c.nii", in / "out.mha"}) {
+    const auto r = test::run_tool("ctsurg-import", {ct.string(), output.string()});
+    EXPECT_EQ(r.exit_code, 2) << r.output;
+    EXPECT_NE(r.output.find("suffix"), std::string::npos) << r.output;
+  }
+  EXPECT_EQ(test::read_bytes(ct), before) << "the input was replaced";
+  const auto src = test::write_mhd(in.path(), "ct", 3, 3, 3, std::vector<float>(27, 40.0f));
+  fs::create_symlink(in / "ct.raw", in / "raw.h5");
+  const auto r = test::run_tool("ctsurg-import", {src.string(), (in / "raw.h5").string()});
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("is the input"), std::string::npos) << r.output;
+}
+
+// Issue 17: on a full disk (here a file-size limit, SIGXFSZ ignored as Python does for its
+// children), an unreadable .h5 was renamed into place over the previous one, exit 0, and the
+// writer crashed at exit after the error. Now: exit 1, the previous file untouched.
+TEST(CtsurgImport, AFullDiskKeepsThePreviousOutput) {
+  test::TempDir in, out;
+  std::vector<float> v(64 * 64 * 32);
+  for (std::size_t n = 0; n < v.size(); ++n) v[n] = static_cast<float>((n * 2654435761u) % 3000) - 1000.0f;
+  const auto src = test::write_mhd(in.path(), "ct", 64, 64, 32, v);
+  std::ofstream(out / "ct.h5") << "previous";
+  for (const int kib : {4, 100, 180}) {
+    const auto r = test::run_shell("trap '' XFSZ; ulimit -f " + std::to_string(kib) + "; CTSURG_NO_PROGRESS=1 " +
+                                   std::string(CTSURG_TOOL_DIR) + "/ctsurg-import " + src.string() + " " +
+                                   (out / "ct.h5").string());
+    EXPECT_EQ(r.exit_code, 1) << "limit " << kib << " KiB: " << r.output;
+    EXPECT_NE(r.output.find("ct.h5"), std::string::npos) << r.output;
+    EXPECT_EQ(slurp(out / "ct.h5"), "previous") << "limit " << kib << " KiB";
+    EXPECT_EQ(test::files_in(out.path()).size(), 1u) << "temporary files left behind";
+  }
+}
+
+// Issue 17: CTSURG_MAX_MEMORY_MB=50 did not cap real use (197 MB import), bad values were ignored
+// and refusals exited 2 where docs/formats.md says 1.
+TEST(CtsurgImport, TheMemoryCapIsValidatedAndHolds) {
+  test::TempDir out;
+  const auto ct = test::source_dir() / "data_samples" / "heart" / "heart_ct.nii.gz";
+  const std::string tool = std::string(CTSURG_TOOL_DIR) + "/ctsurg-import ";
+  for (const char* bad : {"fifty", "0", "-1"}) {
+    const auto r = test::run_shell(std::string("CTSURG_MAX_MEMORY_MB=") + bad + " " + tool + ct.string() + " " +
+                                   (out / "ct.h5").string());
+    EXPECT_EQ(r.exit_code, 2) << r.output;
+    EXPECT_NE(r.output.find("CTSURG_MAX_MEMORY_MB"), std::string::npos) << r.output;
+  }
+  // Under any cap the import either fits (exit 0) or stops as out of memory (exit 1) naming the cap:
+  // never bad input, never a crash in a library that met the limit.
+  int refused = 0;
+  for (int mb = 8; mb <= 64; mb += 4) {
+    const std::string cap = "CTSURG_MAX_MEMORY_MB=" + std::to_string(mb);
+    const auto r = test::run_shell(cap + " " + tool + ct.string() + " " + (out / "ct.h5").string());
+    EXPECT_TRUE(r.exit_code == 0 || r.exit_code == 1) << cap << ": exit " << r.exit_code << "\n" << r.output;
+    if (r.exit_code == 1) {
+      ++refused;
+      EXPECT_NE(r.output.find(cap), std::string::npos) << r.output;
+      EXPECT_TRUE(test::files_in(out.path()).empty());
+    }
+  }
+  EXPECT_GT(refused, 0) << "no cap was too small: the test does not test the cap";
+  const auto ok = test::run_shell("CTSURG_MAX_MEMORY_MB=2000 " + tool + ct.string() + " " + (out / "ct.h5").string());
+  EXPECT_EQ(ok.exit_code, 0) << ok.output;
+}
+
 // Issue 17: library noise was printed before ctsurg's error, and errors named a temporary copy of a
 // repaired NRRD header instead of the user's file.
 TEST(CtsurgImport, OneMessageNamingTheUsersFile) {
@@ -259,4 +307,22 @@ TEST(CtsurgImport, OneMessageNamingTheUsersFile) {
   EXPECT_EQ(r.exit_code, 2) << r.output;
   EXPECT_NE(r.output.find((in / "scan.nhdr").string()), std::string::npos) << r.output;
   EXPECT_EQ(r.output.find("ctsurg-nrrd-"), std::string::npos) << "names the temporary copy: " << r.output;
+}
+
+// Issue 17: a DICOM slice whose BitsAllocated lies (says 32 over 16-bit pixel data) crashed the
+// decoder. Refused naming the slice and the field.
+TEST(CtsurgImport, ADicomSliceWhoseBitsAllocatedLiesIsRefused) {
+  CTSURG_REQUIRE_SHARED_DATA();
+  test::TempDir in, out;
+  const auto series = in / "series";
+  fs::copy(test::shared_data_dir() / "dicom_qa" / "Philips_S21570_S2010", series);
+  fs::permissions(series / "I150", fs::perms::owner_write, fs::perm_options::add);
+  std::string bytes = test::read_bytes(series / "I150");
+  const std::string tag("\x28\x00\x00\x01US\x02\x00", 8);  // (0028,0100) US, length 2, explicit VR little endian
+  const auto at = bytes.find(tag);
+  ASSERT_NE(at, std::string::npos);
+  ASSERT_EQ(bytes[at + 8], '\x10');  // 16
+  bytes[at + 8] = '\x20';            // 32
+  std::ofstream(series / "I150", std::ios::binary) << bytes;
+  expect_rejected({series.string(), (out / "ct.h5").string()}, "I150: BitsAllocated (0028,0100)", out.path());
 }
