@@ -178,3 +178,19 @@ TEST(CtsurgPhantom, RerunGivesIdenticalBytes) {
 }
 
 }  // namespace
+
+// Issue 17: on a full disk the phantom's .nii, .nii.gz and .mha were committed truncated with exit
+// 0 (ITK's writers lose write errors). The written image is read back before it is committed: here
+// a 2 KiB file-size limit gives exit 1 and the previous files stay as they were.
+TEST(CtsurgPhantom, AFullDiskKeepsThePreviousFiles) {
+  ctsurg::test::TempDir dir;
+  for (const char* name : {"ct.nii", "ct.nii.gz", "ct.mha"}) {
+    std::ofstream(dir / name) << "previous";
+    const auto r = ctsurg::test::run_shell("trap '' XFSZ; ulimit -f 2; CTSURG_NO_PROGRESS=1 " +
+                                           std::string(CTSURG_TOOL_DIR) + "/ctsurg-phantom sphere " +
+                                           (dir / name).string() + " --radius-mm 12 --spacing-mm 0.5");
+    EXPECT_EQ(r.exit_code, 1) << name << ": " << r.output;
+    EXPECT_EQ(ctsurg::test::read_bytes(dir / name), "previous") << name;
+  }
+  EXPECT_EQ(ctsurg::test::files_in(dir.path()).size(), 3u) << "temporary or sidecar files left behind";
+}
