@@ -147,6 +147,8 @@ TEST(CtsurgTetmesh, BadInputExitsTwoAndLeavesNoFile) {
   expect_bad({grid.string(), (dir / "m.vtk").string()}, "unknown output format");
   expect_bad({(dir / "missing.h5").string(), out}, "missing.h5");
   expect_bad({grid.string(), (dir / "no_such_folder" / "m.h5").string()}, "no_such_folder");
+  // Issue 17: an output that is the input replaced it.
+  expect_bad({grid.string(), grid.string()}, "is the input");
   // The memory guard: a fine mesh that cannot fit in the memory allowed is refused before meshing
   // (exit 1: out of memory, docs/formats.md).
   const auto before = ctsurg::test::files_in(dir.path());
