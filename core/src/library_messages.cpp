@@ -57,6 +57,10 @@ std::string LibraryMessages::take() {
     raw.append(buffer, static_cast<std::size_t>(n));
   }
   ::close(capture_);
+  return folded_text(raw);
+}
+
+std::string folded_text(const std::string& raw) {
   std::istringstream lines(raw);
   std::string line, text;
   while (std::getline(lines, line)) {

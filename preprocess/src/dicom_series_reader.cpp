@@ -11,15 +11,20 @@
 #include "ctsurg/preprocess/dicom_series_reader.h"
 
 #include "ctsurg/core/error.h"
+#include "ctsurg/core/isolated_call.h"
 #include "ctsurg/core/library_messages.h"
 #include "ctsurg/core/memory_guard.h"
 #include "ctsurg/core/progress_bar.h"
+#include "ctsurg/preprocess/dicom_file_check.h"
 #include "ctsurg/preprocess/slice_stack.h"
 
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <cstring>
+#include <memory>
 #include <fstream>
 #include <map>
 #include <sstream>
@@ -218,6 +223,8 @@ std::vector<DicomSeriesInfo> scan_dicom_folder(const fs::path& folder, std::vect
   std::sort(names.begin(), names.end());
   if (names.empty()) throw InputError(folder.string(), "", "folder is empty: no DICOM files");
 
+  // GDCM allocates what an element's length declares before reading it: lengths are checked first.
+  for (const auto& name : names) check_dicom_element_lengths(name);
   gdcm::Scanner scan;
   for (const auto& t : {kSeriesUid, kSeriesNumber, kDescription, kModality, kImageType, kPosition, kOrientation,
                         kRows, kColumns, kPixelSpacing, kFrames})
@@ -281,7 +288,10 @@ std::vector<DicomSeriesInfo> scan_dicom_folder(const fs::path& folder, std::vect
   return out;
 }
 
-DicomVolume read_dicom_series(const fs::path& folder, const DicomReadOptions& options) {
+namespace {
+
+// The reading itself (in the child process of read_dicom_series); progress(done, total) per slice.
+DicomVolume read_series(const fs::path& folder, const DicomReadOptions& options, const ProgressReport& progress) {
   std::vector<std::string> skipped;
   const auto all = scan_dicom_folder(folder, &skipped);
   for (const auto& s : skipped) spdlog::debug("skipped {}", s);
@@ -373,7 +383,6 @@ DicomVolume read_dicom_series(const fs::path& folder, const DicomReadOptions& op
   Volume<float> slices(geometry);
   const std::size_t plane = std::size_t(ref.rows) * std::size_t(ref.columns);
   {
-    ProgressBar progress("reading DICOM slices", headers.size());
     for (std::size_t k = 0; k < headers.size(); ++k) {
       const SliceHeader& h = headers[static_cast<std::size_t>(stack.order[k])];
       const auto values = read_slice(h, &out.warnings);
@@ -386,7 +395,7 @@ DicomVolume read_dicom_series(const fs::path& folder, const DicomReadOptions& op
       }
       std::copy(values.begin(), values.end(), slices.voxels.begin() + static_cast<std::ptrdiff_t>(k * plane));
       out.files.push_back(h.file);
-      progress.advance();
+      progress(k + 1, headers.size());
     }
   }
 
@@ -415,6 +424,65 @@ DicomVolume read_dicom_series(const fs::path& folder, const DicomReadOptions& op
   }
   out.hu = std::move(slices);
   return out;
+}
+
+// A DicomVolume as bytes: a JSON line (geometry, source, warnings, files), then the voxels.
+std::string serialised(const DicomVolume& v) {
+  const ImageGeometry& g = v.hu.geometry;
+  nlohmann::json head;
+  head["dims"] = g.dims;
+  head["spacing"] = {g.spacing[0], g.spacing[1], g.spacing[2]};
+  head["origin"] = {g.origin[0], g.origin[1], g.origin[2]};
+  head["direction"] = nlohmann::json::array();
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) head["direction"].push_back(g.direction(r, c));
+  head["source"] = v.source;
+  head["warnings"] = v.warnings;
+  head["files"] = nlohmann::json::array();
+  for (const auto& f : v.files) head["files"].push_back(f.string());
+  return head.dump() + "\n" +
+         std::string(reinterpret_cast<const char*>(v.hu.voxels.data()), v.hu.voxels.size() * sizeof(float));
+}
+
+DicomVolume deserialised(const std::string& bytes) {
+  const auto newline = bytes.find('\n');
+  const nlohmann::json head = nlohmann::json::parse(bytes.substr(0, newline));
+  DicomVolume v;
+  ImageGeometry g;
+  g.dims = head.at("dims").get<std::array<int64_t, 3>>();
+  for (int a = 0; a < 3; ++a) {
+    g.spacing[a] = head.at("spacing")[static_cast<std::size_t>(a)];
+    g.origin[a] = head.at("origin")[static_cast<std::size_t>(a)];
+  }
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) g.direction(r, c) = head.at("direction")[static_cast<std::size_t>(3 * r + c)];
+  v.hu.geometry = g;
+  const std::size_t count = static_cast<std::size_t>(g.voxel_count());
+  if (bytes.size() - newline - 1 != count * sizeof(float)) throw RuntimeError("DICOM reading: the volume came back incomplete");
+  v.hu.voxels.resize(count);
+  std::memcpy(v.hu.voxels.data(), bytes.data() + newline + 1, count * sizeof(float));
+  v.source = head.at("source");
+  v.warnings = head.at("warnings").get<std::vector<std::string>>();
+  for (const auto& f : head.at("files")) v.files.emplace_back(f.get<std::string>());
+  return v;
+}
+
+}  // namespace
+
+DicomVolume read_dicom_series(const fs::path& folder, const DicomReadOptions& options) {
+  // GDCM and ITK's decoders assert and allocate on damaged files in ways no check can foresee, so the
+  // folder is read in a child process (isolated_call.h): a crash there refuses the folder.
+  std::unique_ptr<ProgressBar> bar;
+  const std::string bytes = isolated_call(
+      folder.string(),
+      [&](const ProgressReport& progress) { return serialised(read_series(folder, options, progress)); },
+      [&](uint64_t done, uint64_t total) {
+        if (!bar) bar = std::make_unique<ProgressBar>("reading DICOM slices", total);
+        bar->advance(1);
+        (void)done;
+      });
+  bar.reset();
+  return deserialised(bytes);
 }
 
 }  // namespace ctsurg

@@ -70,6 +70,7 @@ TEST(ImageGeometry, InsaneGeometryIsRefused) {
   };
   ImageGeometry b = g;
   b.dims = {int64_t{1} << 32, int64_t{1} << 32, 4};
+  b.spacing = Eigen::Vector3d(1e-3, 1e-3, 1.0);  // 4.3 km each way: only the count is wrong
   refused(b, "dims");
   b = g;
   b.spacing[1] = 1.7e38;

@@ -29,6 +29,10 @@ class LibraryMessages {
   bool restored_ = false;
 };
 
+// Raw text a library printed, as take() gives it: lines joined by "; ", blank lines dropped, at most
+// about 600 characters.
+std::string folded_text(const std::string& raw);
+
 // `problem`, followed by " (the library said: <text>)" when `text` is not empty.
 std::string with_library_text(const std::string& problem, const std::string& text);
 
