@@ -15,7 +15,7 @@
 #include "ctsurg/core/input_file.h"
 #include "ctsurg/core/library_messages.h"
 #include "ctsurg/core/memory_guard.h"
-#include "ctsurg/preprocess/ct_import.h"
+#include "ctsurg/preprocess/detached_data_files.h"
 #include "ctsurg/preprocess/metaimage_verification.h"
 #include "ctsurg/preprocess/nifti_verification.h"
 
