@@ -1,5 +1,6 @@
 #include "ctsurg/core/isolated_call.h"
 
+#include "ctsurg/core/anonymous_file.h"
 #include "ctsurg/core/error.h"
 #include "ctsurg/core/library_messages.h"
 
@@ -19,17 +20,6 @@
 namespace ctsurg {
 
 namespace {
-
-int anonymous_file() {
-  const char* dir = std::getenv("TMPDIR");
-  const std::string folder = dir && *dir ? dir : "/tmp";
-  int fd = ::open(folder.c_str(), O_TMPFILE | O_RDWR | O_CLOEXEC, 0600);
-  if (fd >= 0) return fd;
-  std::string name = folder + "/ctsurg-child-XXXXXX";
-  fd = ::mkstemp(name.data());
-  if (fd >= 0) ::unlink(name.c_str());
-  return fd;
-}
 
 void write_all(int fd, std::string_view bytes) {
   for (std::size_t done = 0; done < bytes.size();) {

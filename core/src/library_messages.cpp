@@ -1,5 +1,7 @@
 #include "ctsurg/core/library_messages.h"
 
+#include "ctsurg/core/anonymous_file.h"
+
 #include <fcntl.h>
 #include <unistd.h>
 
@@ -13,18 +15,6 @@ namespace ctsurg {
 namespace {
 
 constexpr std::size_t kMaxText = 600;
-
-// An unnamed temporary file (O_TMPFILE where the file system has it, else a file unlinked at once).
-int anonymous_file() {
-  const char* dir = std::getenv("TMPDIR");
-  const std::string folder = dir && *dir ? dir : "/tmp";
-  int fd = ::open(folder.c_str(), O_TMPFILE | O_RDWR | O_CLOEXEC, 0600);
-  if (fd >= 0) return fd;
-  std::string name = folder + "/ctsurg-messages-XXXXXX";
-  fd = ::mkstemp(name.data());
-  if (fd >= 0) ::unlink(name.c_str());
-  return fd;
-}
 
 }  // namespace
 

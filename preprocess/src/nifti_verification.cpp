@@ -120,39 +120,42 @@ uint32_t raw_u32(const unsigned char* b) {
 
 uint32_t byte_swap(uint32_t v) { return __builtin_bswap32(v); }
 
+// Where the fields lie in each version's header (nifti1.h, nifti2.h).
+struct Offsets {
+  std::size_t magic, magic_size, dim, datatype, bitpix, pixdim, vox_offset, scl_slope, scl_inter, qform_code, sform_code,
+      quatern, srow;
+};
+constexpr Offsets kNifti1{344, 4, 40, 70, 72, 76, 108, 112, 116, 252, 254, 256, 280};
+constexpr Offsets kNifti2{4, 8, 16, 12, 14, 104, 168, 176, 184, 344, 348, 352, 400};
+
+// The fields at `o`, stored as Dim (dim), Code (the xform codes), Real (pixdim, scaling, qform,
+// srow) and Offset (vox_offset): NIfTI-1 int16/int16/float32/float32, NIfTI-2 int64/int32/float64/int64.
+template <class Dim, class Code, class Real, class Offset>
+void read_fields(const Fields& f, const unsigned char* h, const Offsets& o, Header& hd) {
+  hd.magic.assign(reinterpret_cast<const char*>(h + o.magic), o.magic_size);
+  for (std::size_t i = 0; i < 8; ++i) hd.dim[i] = f.get<Dim>(o.dim + sizeof(Dim) * i);
+  hd.datatype = f.get<int16_t>(o.datatype);
+  hd.bitpix = f.get<int16_t>(o.bitpix);
+  for (std::size_t i = 0; i < 8; ++i) hd.pixdim[i] = f.get<Real>(o.pixdim + sizeof(Real) * i);
+  hd.vox_offset = static_cast<double>(f.get<Offset>(o.vox_offset));
+  hd.scl_slope = f.get<Real>(o.scl_slope);
+  hd.scl_inter = f.get<Real>(o.scl_inter);
+  hd.qform_code = f.get<Code>(o.qform_code);
+  hd.sform_code = f.get<Code>(o.sform_code);
+  for (std::size_t i = 0; i < 6; ++i) hd.quatern[i] = f.get<Real>(o.quatern + sizeof(Real) * i);
+  for (std::size_t i = 0; i < 12; ++i) hd.srow[i] = f.get<Real>(o.srow + sizeof(Real) * i);
+}
+
 Header parse_header(const unsigned char* h, std::size_t size, bool swap) {
   const Fields f(h, swap);
   Header hd;
   hd.size = size;
   hd.swap = swap;
-  if (size == 348) {
-    hd.version = 1;
-    hd.magic.assign(reinterpret_cast<const char*>(h + 344), 4);
-    for (int i = 0; i < 8; ++i) hd.dim[i] = f.get<int16_t>(40 + 2 * i);
-    hd.datatype = f.get<int16_t>(70);
-    hd.bitpix = f.get<int16_t>(72);
-    for (int i = 0; i < 8; ++i) hd.pixdim[i] = f.get<float>(76 + 4 * i);
-    hd.vox_offset = f.get<float>(108);
-    hd.scl_slope = f.get<float>(112);
-    hd.scl_inter = f.get<float>(116);
-    hd.qform_code = f.get<int16_t>(252);
-    hd.sform_code = f.get<int16_t>(254);
-    for (int i = 0; i < 6; ++i) hd.quatern[i] = f.get<float>(256 + 4 * i);
-    for (int i = 0; i < 12; ++i) hd.srow[i] = f.get<float>(280 + 4 * i);
+  hd.version = size == 348 ? 1 : 2;
+  if (hd.version == 1) {
+    read_fields<int16_t, int16_t, float, float>(f, h, kNifti1, hd);
   } else {
-    hd.version = 2;
-    hd.magic.assign(reinterpret_cast<const char*>(h + 4), 8);
-    hd.datatype = f.get<int16_t>(12);
-    hd.bitpix = f.get<int16_t>(14);
-    for (int i = 0; i < 8; ++i) hd.dim[i] = f.get<int64_t>(16 + 8 * i);
-    for (int i = 0; i < 8; ++i) hd.pixdim[i] = f.get<double>(104 + 8 * i);
-    hd.vox_offset = static_cast<double>(f.get<int64_t>(168));
-    hd.scl_slope = f.get<double>(176);
-    hd.scl_inter = f.get<double>(184);
-    hd.qform_code = f.get<int32_t>(344);
-    hd.sform_code = f.get<int32_t>(348);
-    for (int i = 0; i < 6; ++i) hd.quatern[i] = f.get<double>(352 + 8 * i);
-    for (int i = 0; i < 12; ++i) hd.srow[i] = f.get<double>(400 + 8 * i);
+    read_fields<int64_t, int32_t, double, int64_t>(f, h, kNifti2, hd);
   }
   return hd;
 }

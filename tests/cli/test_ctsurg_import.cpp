@@ -34,6 +34,14 @@ void expect_rejected(const std::vector<std::string>& args, const std::string& me
   EXPECT_EQ(test::files_in(out_folder), before) << "partial output left behind";
 }
 
+// A copy of the Philips series of ../shared/data whose slice I150 a test may damage.
+fs::path philips_series(const test::TempDir& in) {
+  const auto series = in / "series";
+  fs::copy(test::shared_data_dir() / "dicom_qa" / "Philips_S21570_S2010", series);
+  fs::permissions(series / "I150", fs::perms::owner_write, fs::perm_options::add);
+  return series;
+}
+
 }  // namespace
 
 TEST(CtsurgImport, HelpAndVersion) {
@@ -118,9 +126,7 @@ TEST(CtsurgImport, MixedSeriesFolderIsRejectedUntilOneIsChosen) {
 TEST(CtsurgImport, CorruptOrTruncatedDicomSliceIsNamedNotSkipped) {
   CTSURG_REQUIRE_SHARED_DATA();
   test::TempDir in, out;
-  const auto series = in / "series";
-  fs::copy(test::shared_data_dir() / "dicom_qa" / "Philips_S21570_S2010", series);
-  fs::permissions(series / "I150", fs::perms::owner_write, fs::perm_options::add);
+  const auto series = philips_series(in);
   fs::resize_file(series / "I150", 200000);  // cut off inside the pixel data
   expect_rejected({series.string(), (out / "ct.h5").string()}, "I150: (7FE0,0010): declares 524288 bytes, but the file has", out.path());
   fs::remove(series / "I150");
@@ -314,9 +320,7 @@ TEST(CtsurgImport, OneMessageNamingTheUsersFile) {
 TEST(CtsurgImport, ADicomSliceWhoseBitsAllocatedLiesIsRefused) {
   CTSURG_REQUIRE_SHARED_DATA();
   test::TempDir in, out;
-  const auto series = in / "series";
-  fs::copy(test::shared_data_dir() / "dicom_qa" / "Philips_S21570_S2010", series);
-  fs::permissions(series / "I150", fs::perms::owner_write, fs::perm_options::add);
+  const auto series = philips_series(in);
   std::string bytes = test::read_bytes(series / "I150");
   const std::string tag("\x28\x00\x00\x01US\x02\x00", 8);  // (0028,0100) US, length 2, explicit VR little endian
   const auto at = bytes.find(tag);
