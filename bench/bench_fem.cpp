@@ -11,10 +11,13 @@
 // 3. The cantilever of tests/sim/test_fem_static_solver.cpp at finer meshes than the test can afford
 //    (n = 8, 12, 14 cells across the thickness, L = 10 h): counter error_pct = tip deflection error
 //    against Euler-Bernoulli (linear tets lock in bending: the error falls as n^-2).
+// 4. Issue 16: Neo-Hookean quasi-static frames on the direct (CHOLMOD) Newton path, linear and
+//    quadratic tets (setup apart from the time per frame), and implicit Euler steps.
 // 2. Explicit dynamics: element updates per second (tets x steps / s) of the full step (element pass,
 //    node gather, central-difference update) at 10k .. 500k tets, 1 and 2 threads.
 #include "ctsurg/sim/fem/fem_box_mesh.h"
 #include "ctsurg/sim/fem/fem_explicit_dynamics.h"
+#include "ctsurg/sim/fem/fem_implicit_dynamics.h"
 #include "ctsurg/sim/fem/fem_linear_static_solver.h"
 #include "ctsurg/sim/fem/fem_static_solver.h"
 
@@ -101,6 +104,87 @@ void BM_FemStaticNeoHookean(benchmark::State& s) { static_solve(s, FemMaterialMo
 void BM_FemStaticLinear(benchmark::State& s) { static_solve(s, FemMaterialModel::linear); }
 BENCHMARK(BM_FemStaticNeoHookean)->ArgsProduct({{9, 12, 14, 16}, {0, 1}})->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_FemStaticLinear)->ArgsProduct({{9, 12, 14, 16}, {0, 1}})->Unit(benchmark::kMillisecond)->UseRealTime();
+
+// Issue 16: the direct (CHOLMOD) Newton path at the Table 2 sizes, for the linear (4-node) and the
+// quadratic (10-node) tets of the same cube. A FemStaticSolver kept across solves, as a scenario
+// keeps it: setup_ms = the first solve of the 10 % grab (2 mm) from rest (pattern, analysis, the
+// first factorisations), then each iteration is one quasi-static frame: the grab 0.1 mm further
+// (2.0, 2.1, ... 2.9, 2.0, ... mm), warm-started from the previous frame. Counters: Newton
+// iterations and factorisations per frame, the factor's size. range(1): tolerance in um (0: the
+// relative 1e-8 rule); range(2): 1 linear tets, 2 quadratic.
+void BM_FemNeoHookeanGrabDirect(benchmark::State& state) {
+  const int n = static_cast<int>(state.range(0));
+  const double tol_mm = 1e-3 * static_cast<double>(state.range(1));
+  const bool quadratic = state.range(2) == 2;
+  const FemModel& lin = cube(n, FemMaterialModel::neo_hookean);
+  static std::map<int, std::unique_ptr<FemModel>> quadratic_models;
+  auto& q = quadratic_models[n];
+  if (quadratic && !q) {
+    const auto box = fem_box_mesh({n, n, n}, {20, 20, 20});
+    q = std::make_unique<FemModel>(build_quadratic_fem_model(box.nodes, box.tets, material(FemMaterialModel::neo_hookean)));
+  }
+  const FemModel& m = quadratic ? *q : lin;
+  FemBoundaryConditions bc = cube_grab(m, 2.0);
+  FemStaticOptions o;
+  o.linear_solve = FemLinearSolve::direct;
+  o.tolerance_mm = tol_mm;
+  FemStaticSolver solver(m, o);
+  const FemStaticResult first = solver.solve(bc, {});
+  std::vector<double> u = first.displacements;
+  int k = 0, frames = 0, newton = 0, factorizations = 0;
+  for (auto _ : state) {
+    const double depth = 2.0 + 0.1 * (++k % 10);
+    for (std::size_t g = 0; g < bc.prescribed_nodes.size(); ++g) bc.prescribed_displacements[3 * g + 2] = -depth;
+    const FemStaticResult r = solver.solve(bc, {}, &u);
+    u = r.displacements;
+    ++frames;
+    newton += r.report.newton_iterations;
+    factorizations += r.report.factorizations;
+  }
+  state.counters["vertices"] = lin.node_count();
+  state.counters["nodes"] = m.node_count();
+  state.counters["setup_ms"] = 1e3 * first.report.seconds;
+  state.counters["setup_newton"] = first.report.newton_iterations;
+  state.counters["newton_per_frame"] = static_cast<double>(newton) / std::max(1, frames);
+  state.counters["factorizations_per_frame"] = static_cast<double>(factorizations) / std::max(1, frames);
+  state.counters["factor_mb"] = static_cast<double>(first.report.factor_bytes) / 1048576.0;
+}
+BENCHMARK(BM_FemNeoHookeanGrabDirect)
+    ->ArgsProduct({{9, 12, 14, 16}, {0, 10}, {1}})
+    ->Args({9, 10, 2})
+    ->Args({16, 10, 2})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
+// Issue 16: one implicit (backward Euler) step of 1/60 s per iteration, the grab moving 0.1 mm a step
+// (as a live drag), at the Table 2 sizes; Neo-Hookean and corotational, tolerance 0.01 mm. Counters:
+// Newton iterations and factorisations per step.
+void BM_FemImplicitStep(benchmark::State& state) {
+  const int n = static_cast<int>(state.range(0));
+  const auto law = state.range(1) ? FemMaterialModel::corotational : FemMaterialModel::neo_hookean;
+  const FemModel& m = cube(n, law);
+  FemBoundaryConditions bc = cube_grab(m, 0.0);
+  FemImplicitOptions o;
+  o.newton.tolerance_mm = 0.01;
+  FemImplicitDynamics d(m, o);
+  d.set_supports(bc.fixed_nodes);
+  d.set_prescribed(bc.prescribed_nodes, bc.prescribed_displacements);
+  d.step(1);  // the pattern, the analysis, the first factor
+  int k = 0, steps = 0, newton = 0, factorizations = 0;
+  for (auto _ : state) {
+    const double depth = 0.1 * (++k % 30);
+    for (std::size_t g = 0; g < bc.prescribed_nodes.size(); ++g) bc.prescribed_displacements[3 * g + 2] = -depth;
+    d.set_prescribed(bc.prescribed_nodes, bc.prescribed_displacements);
+    const FemImplicitStepReport r = d.step(1);
+    ++steps;
+    newton += r.newton_iterations;
+    factorizations += r.factorizations;
+  }
+  state.counters["vertices"] = m.node_count();
+  state.counters["newton_per_step"] = static_cast<double>(newton) / std::max(1, steps);
+  state.counters["factorizations_per_step"] = static_cast<double>(factorizations) / std::max(1, steps);
+}
+BENCHMARK(BM_FemImplicitStep)->ArgsProduct({{9, 12, 14, 16}, {0, 1}})->Unit(benchmark::kMillisecond)->UseRealTime();
 
 // Explicit steps: a box of about `tets` tets (n x n x 2n cells, 12 n^3 tets), the bottom fixed, gravity,
 // damping; a grab on top so that the body deforms.

@@ -275,6 +275,11 @@ if want fem; then
     echo "219-1,297 ms average per deformation step at 1,018-5,071 vertices. Load average at the start: $(cut -d' ' -f1-3 /proc/loadavg)."
     echo
     "$BIN/bench_fem" --benchmark_format=json 2>/dev/null | gbench_table
+    echo
+    echo "Sparse Cholesky of the linear stiffness (\`build/bin/bench_sparse_factorisation\`: why CHOLMOD, issue 16;"
+    echo "one numeric factorisation per iteration, the analysis once)."
+    echo
+    "$BIN/bench_sparse_factorisation" --benchmark_format=json 2>/dev/null | gbench_table
   } >"$fem"
   splice fem "$fem"
 fi
@@ -293,8 +298,9 @@ if want kidney && [[ -e $DATA/abdomen/upper_abdomen_ct.nii.gz ]]; then
   } >"$kid"
   splice kidney "$kid"
 fi
-# Time against error (issue 9; bench/time_vs_error.sh, docs/accuracy.md): every model and setting on
-# the cantilever, kidney and heart scenarios against a cached Neo-Hookean reference; the budget table.
+# Time against error (issues 9 and 16; bench/time_vs_error.sh, docs/accuracy.md): every model and setting
+# on the cantilever, kidney and heart scenarios against a cached quadratic Neo-Hookean reference; the
+# budget tables.
 if want accuracy; then
   acc=$WORK/accuracy.md
   {

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Time against error (issue 9), one command: makes the kidney and heart inputs at every resolution
+# Time against error (issues 9 and 16), one command: makes the kidney and heart inputs at every resolution
 # level (ctsurg-import, -grid, -surface, -tetmesh; cached in OUT/inputs), runs bench time_vs_error on
 # the cantilever, kidney and heart scenarios, and copies the Pareto plots to docs/img/.
 #   bench/time_vs_error.sh [BUILD_DIR [OUT]]      (default build, build/time_vs_error)
@@ -35,9 +35,42 @@ if [[ $SCENARIOS == *kidney* ]]; then
 fi
 if [[ $SCENARIOS == *heart* ]]; then
   [[ -f $IN/heart/ct.h5 ]] || "$BIN/ctsurg-import" -q data_samples/heart/heart_ct.nii.gz "$IN/heart/ct.h5"
-  for v in 7.2 4.8 3.6; do level heart "$IN/heart/ct.h5" data_samples/heart/heart_mask.nii.gz $v; done
+  for v in 7.2 4.8 3.6 2.4; do level heart "$IN/heart/ct.h5" data_samples/heart/heart_mask.nii.gz $v; done
 fi
 "$BIN/time_vs_error" --inputs "$IN" --out "$OUT" --scenarios "$SCENARIOS" ${QUICK:+--quick}
+# Peak resident memory of the direct solver on the heart's finest levels: ctsurg-sim (the whole tool:
+# files, model, surface, factor) on one static frame of the grab, GNU time's maximum RSS.
+if [[ $SCENARIOS == *heart* && -z ${QUICK:-} ]]; then
+  cmake --build "$BUILD" -j2 --target ctsurg-sim >/dev/null
+  {
+    echo
+    echo "Peak resident memory of ctsurg-sim, one static frame of the heart grab (the direct solver's factor included):"
+    echo
+    echo "| model | level | nodes | peak memory (MiB) | wall (s) |"
+    echo "|---|---:|---:|---:|---:|"
+  } >>"$OUT/budgets.md"
+  for run in "neo_hookean linear 2.4" "neo_hookean quadratic 3.6" "neo_hookean quadratic 4.8"; do
+    read -r law elements v <<<"$run"
+    d=$IN/heart/v$v
+    cat >"$OUT/memory.yaml" <<EOF
+ctsurg_scenario: 1
+model: {kind: fem, tetmesh: $d/tetmesh.h5, surface: $d/surface.h5, material_law: $law, solver: static, elements: $elements}
+material: {preset: myocardium}
+fixed:
+  - box_fraction: {min: [0, 0, 0.85], max: [1, 1, 1]}
+tools:
+  - grab: {radius_mm: 8, snap_to_tissue: true, path: [{t: 0, at_fraction: [0.75, 0.0, 0.2]}, {t: 0.25, offset_mm: [5, -12.5, -5]}]}
+time: {duration_s: 0.25}
+output: {trajectory: $OUT/memory.h5, frame_interval_s: 0.25}
+solver: {tolerance_mm: 0.01}
+EOF
+    /usr/bin/time -f "%M %e" -o "$OUT/memory.time" "$BIN/ctsurg-sim" -v "$OUT/memory.yaml" 2>"$OUT/memory.log" >/dev/null
+    read -r kib secs <"$OUT/memory.time"
+    nodes=$(grep -oE '[0-9]+ (nodes|particles)' "$OUT/memory.log" | head -1 | awk '{print $1}')
+    echo "| $law $elements tets | h $v mm | ${nodes:-?} | $((kib / 1024)) | $secs |" >>"$OUT/budgets.md"
+  done
+  rm -f "$OUT/memory.yaml" "$OUT/memory.h5" "$OUT/memory.xdmf" "$OUT/memory.time"
+fi
 mkdir -p docs/img
 for f in "$OUT"/pareto_*.png; do cp "$f" docs/img/accuracy_$(basename "$f"); done
 cat "$OUT/budgets.md"

@@ -37,3 +37,16 @@ set_target_properties(OSMesa::OSMesa PROPERTIES IMPORTED_LOCATION "${OSMESA_LIBR
 
 # Scenario files (sim/src/scenario.cpp): YAML (JSON is read as YAML 1.2 flow style).
 find_package(yaml-cpp REQUIRED)
+
+# SuiteSparse's CHOLMOD: the sparse Cholesky factorisation of the FEM's Newton and linear solves
+# (sim/fem/src/sparse_cholesky.cpp, docs/fem.md). Debian 12's SuiteSparse 5 ships no CMake package, so the
+# header and library are found directly. Its supernodal factorisation runs on BLAS: install-deps.sh installs
+# OpenBLAS, which Debian's alternatives then select over the reference BLAS (10x faster factorisations).
+find_path(CHOLMOD_INCLUDE_DIR cholmod.h PATH_SUFFIXES suitesparse)
+find_library(CHOLMOD_LIBRARY cholmod)
+if(NOT CHOLMOD_INCLUDE_DIR OR NOT CHOLMOD_LIBRARY)
+  message(FATAL_ERROR "CHOLMOD not found: install libsuitesparse-dev (scripts/install-deps.sh)")
+endif()
+add_library(SuiteSparse::CHOLMOD UNKNOWN IMPORTED)
+set_target_properties(SuiteSparse::CHOLMOD PROPERTIES IMPORTED_LOCATION "${CHOLMOD_LIBRARY}"
+                      INTERFACE_INCLUDE_DIRECTORIES "${CHOLMOD_INCLUDE_DIR}")

@@ -22,11 +22,12 @@ std::string rest_text(const double* p) {
   return s.str();
 }
 
+// The rest centroid of element e, LPS mm.
 std::array<double, 3> centroid(const FemModel& m, int32_t e) {
   std::array<double, 3> c{0, 0, 0};
   for (int a = 0; a < 4; ++a)
     for (int k = 0; k < 3; ++k) c[k] += m.nodes[3 * m.tets[4 * e + a] + k] / 4;
-  return c;
+  return fem_lps_point(m, c.data());
 }
 
 // The guard's messages (one text for both backends). time, step: before the failing step.
@@ -42,7 +43,7 @@ RuntimeError inverted_error(const FemModel& model, int32_t element, double time,
 
 RuntimeError non_finite_error(const FemModel& model, int32_t node, double time, double dt) {
   std::ostringstream m;
-  m << "fem dynamics: node " << node << " (rest " << rest_text(&model.nodes[3 * node])
+  m << "fem dynamics: node " << node << " (rest " << rest_text(fem_lps_point(model, &model.nodes[3 * node]).data())
     << ") got a non-finite displacement at t = " << time + dt << " s; the state before this step is kept "
     << "(suggested: dt <= " << 0.5 * dt << " s)";
   return RuntimeError(m.str());
@@ -75,6 +76,7 @@ FemStepConstants step_constants(double dt, double mass_damping, const std::array
 FemCriticalStep fem_critical_time_step(const FemModel& model, double safety_factor) {
   if (!(safety_factor > 0 && safety_factor <= 1))
     throw InputError("fem critical step", "safety_factor", "must be in (0, 1], got " + std::to_string(safety_factor));
+  if (model.order != 1) throw InputError("fem critical step", "order", "the explicit dynamics runs linear tets only");
   FemCriticalStep cs;
   cs.safety_factor = safety_factor;
   cs.wave_speed = std::sqrt((model.lame.lambda + 2 * model.lame.mu) / model.material.density);
@@ -105,6 +107,8 @@ FemCriticalStep fem_critical_time_step(const FemModel& model, double safety_fact
 FemExplicitDynamics::FemExplicitDynamics(const FemModel& model, const FemDynamicsOptions& options, Backend backend)
     : model_(model), options_(options) {
   if (!backend_available(backend)) require_backend(backend, kWhere);  // cuda without a CUDA build or device: says why
+  if (model.order != 1)
+    throw InputError(kWhere, "order", "the explicit dynamics runs linear tets only (quadratic ones: the static or implicit solver)");
   const auto& o = options;
   if (!(o.mass_damping >= 0 && std::isfinite(o.mass_damping))) throw InputError(kWhere, "mass_damping", "must be finite and >= 0 (1/s)");
   for (double g : o.gravity)

@@ -18,6 +18,7 @@ void check_displacements(const FemModel& model, const std::vector<double>& u, co
 
 void check_tet(const FemModel& model, int32_t e, const char* where) {
   if (e < 0 || e >= model.tet_count()) throw InputError(where, "tet", "id " + std::to_string(e) + " out of range");
+  if (model.order != 1) throw InputError(where, "order", "per-element values are of linear tets only (F varies in a quadratic one)");
 }
 
 void element_displacements(const FemModel& model, int32_t e, const std::vector<double>& u, double* ue) {
@@ -32,8 +33,8 @@ int32_t fem_internal_forces(const FemModel& model, const std::vector<double>& di
   check_displacements(model, displacements, "fem forces");
   const FemElementView<double> el{model.tets.data(), model.dm_inverse.data(), model.rest_volume.data(),
                                   model.tet_count(), static_cast<int32_t>(model.material.model), model.lame.mu,
-                                  model.lame.lambda};
-  std::vector<double> corner(12 * static_cast<std::size_t>(model.tet_count()));
+                                  model.lame.lambda, model.order};
+  std::vector<double> corner(3 * static_cast<std::size_t>(model.nodes_per_element()) * static_cast<std::size_t>(model.tet_count()));
   forces.resize(displacements.size());
   return cpu::fem_forces(el, model.node_offsets.data(), model.node_corners.data(), model.node_count(),
                          displacements.data(), corner.data(), forces.data(), threads);
@@ -43,6 +44,17 @@ double fem_strain_energy(const FemModel& model, const std::vector<double>& displ
   check_displacements(model, displacements, "fem strain energy");
   double energy = 0;
   const int32_t id = static_cast<int32_t>(model.material.model);
+  if (model.order == 2) {
+    for (int32_t e = 0; e < model.tet_count(); ++e) {
+      double ue[30];
+      for (int a = 0; a < 10; ++a)
+        for (int c = 0; c < 3; ++c) ue[3 * a + c] = displacements[3 * static_cast<std::size_t>(model.tets[10 * static_cast<std::size_t>(e) + a]) + c];
+      const double w = fem_quadratic_element_energy(id, model.lame.mu, model.lame.lambda, ue, &model.dm_inverse[9 * e], model.rest_volume[e]);
+      if (w >= 1e30) return HUGE_VAL;
+      energy += w;
+    }
+    return energy;
+  }
   for (int32_t e = 0; e < model.tet_count(); ++e) {
     double ue[12], F[9];
     element_displacements(model, e, displacements, ue);

@@ -2,12 +2,14 @@
 // elements, then over nodes, static partitions. Every result is written by exactly one index, so
 // the bits do not depend on the thread count. Inverted elements are reduced to the lowest id.
 #include "fem_cpu_kernels.h"
+#include "fem_tangent_projection.h"
 
 #include "ctsurg/sim/base/parallel.h"
 
 #include <omp.h>
 
 #include <climits>
+#include <cmath>
 
 namespace ctsurg::sim::cpu {
 namespace {
@@ -19,9 +21,15 @@ int32_t forces_impl(const FemElementView<T>& elements, const int32_t* offsets, c
   int32_t first = INT32_MAX;
 #pragma omp parallel num_threads(t)
   {
+    if (elements.order == 2) {
 #pragma omp for schedule(static) reduction(min : first)
-    for (int32_t e = 0; e < elements.count; ++e)
-      if (!fem_element_force_pass(elements, u, e, corner_forces) && e < first) first = e;
+      for (int32_t e = 0; e < elements.count; ++e)
+        if (!fem_quadratic_element_force_pass(elements, u, e, corner_forces) && e < first) first = e;
+    } else {
+#pragma omp for schedule(static) reduction(min : first)
+      for (int32_t e = 0; e < elements.count; ++e)
+        if (!fem_element_force_pass(elements, u, e, corner_forces) && e < first) first = e;
+    }
 #pragma omp for schedule(static)
     for (int32_t i = 0; i < nodes; ++i) fem_gather_node_force(offsets, corners, corner_forces, i, forces + 3 * i);
   }
@@ -40,19 +48,87 @@ int32_t fem_forces(const FemElementView<float>& elements, const int32_t* offsets
   return forces_impl(elements, offsets, corners, nodes, u, corner_forces, forces, threads);
 }
 
-int32_t fem_stiffness(const FemElementView<double>& el, const double* u, double* k, int threads) {
+namespace {
+
+// The quadratic element's 30 x 30 tangent by quadrature (fem_quadratic_element_impl.h); false when a
+// point's det F <= 0 (K = 0).
+bool quadratic_stiffness(const FemElementView<double>& el, const double* u, int32_t e, bool projecting, double* K) {
+  double ue[30];
+  for (int a = 0; a < 10; ++a)
+    for (int c = 0; c < 3; ++c) ue[3 * a + c] = u[3 * el.tets[10 * e + a] + c];
+  const double* B = el.dm_inverse + 9 * e;
+  for (int i = 0; i < 900; ++i) K[i] = 0;
+  for (int q = 0; q < 4; ++q) {
+    double l[4], G[30], F[9], A[81];
+    fem_quadratic_point(q, l);
+    fem_quadratic_gradients(B, l, G);
+    fem_quadratic_deformation_gradient(ue, G, F);
+    if (!fem_material_tangent(el.model, el.mu, el.lambda, F, A)) {
+      for (int i = 0; i < 900; ++i) K[i] = 0;
+      return false;
+    }
+    if (projecting) project_tangent_psd(A);
+    fem_add_stiffness_from_tangent(A, G, 10, 0.25 * el.volume[e], K);
+  }
+  return true;
+}
+
+}  // namespace
+
+int32_t fem_stiffness(const FemElementView<double>& el, const double* u, double* k, int threads, bool project) {
   const int t = thread_count(threads, el.count / 8);
+  const bool projecting = project && (el.model == kFemStvk || el.model == kFemNeoHookean);
   int32_t first = INT32_MAX;
+  if (el.order == 2) {
+#pragma omp parallel for schedule(static) num_threads(t) reduction(min : first)
+    for (int32_t e = 0; e < el.count; ++e)
+      if (!quadratic_stiffness(el, u, e, projecting, k + 900 * static_cast<int64_t>(e)) && e < first) first = e;
+    return first == INT32_MAX ? -1 : first;
+  }
 #pragma omp parallel for schedule(static) num_threads(t) reduction(min : first)
   for (int32_t e = 0; e < el.count; ++e) {
-    double ue[12];
+    double ue[12], F[9], A[81], g[12];
     for (int a = 0; a < 4; ++a)
       for (int c = 0; c < 3; ++c) ue[3 * a + c] = u[3 * el.tets[4 * e + a] + c];
-    if (!fem_element_stiffness(el.model, el.mu, el.lambda, ue, el.dm_inverse + 9 * e, el.volume[e], k + 144 * static_cast<int64_t>(e)) &&
-        e < first)
-      first = e;
+    const double* B = el.dm_inverse + 9 * e;
+    double* K = k + 144 * static_cast<int64_t>(e);
+    fem_deformation_gradient(ue, B, F);
+    if (!fem_material_tangent(el.model, el.mu, el.lambda, F, A)) {
+      for (int i = 0; i < 144; ++i) K[i] = 0;
+      if (e < first) first = e;
+      continue;
+    }
+    if (projecting) project_tangent_psd(A);
+    fem_shape_gradients(B, g);
+    fem_stiffness_from_tangent(A, g, el.volume[e], K);
   }
   return first == INT32_MAX ? -1 : first;
+}
+
+double fem_strain_energy(const FemElementView<double>& el, const double* u, double* element_energy, int threads) {
+  const int t = thread_count(threads, el.count);
+#pragma omp parallel for schedule(static) num_threads(t)
+  for (int32_t e = 0; e < el.count; ++e) {
+    const double* B = el.dm_inverse + 9 * e;
+    double w;
+    if (el.order == 2) {
+      double ue[30];
+      for (int a = 0; a < 10; ++a)
+        for (int c = 0; c < 3; ++c) ue[3 * a + c] = u[3 * el.tets[10 * e + a] + c];
+      w = fem_quadratic_element_energy(el.model, el.mu, el.lambda, ue, B, el.volume[e]);
+    } else {
+      double ue[12], F[9];
+      for (int a = 0; a < 4; ++a)
+        for (int c = 0; c < 3; ++c) ue[3 * a + c] = u[3 * el.tets[4 * e + a] + c];
+      fem_deformation_gradient(ue, B, F);
+      const bool needs_positive_j = el.model == kFemNeoHookean || el.model == kFemCorotational;
+      w = needs_positive_j && !(det3(F) > 0) ? 1e30 : el.volume[e] * fem_energy_density(el.model, el.mu, el.lambda, F);
+    }
+    element_energy[e] = w >= 1e30 ? HUGE_VAL : w;
+  }
+  double sum = 0;
+  for (int32_t e = 0; e < el.count; ++e) sum += element_energy[e];
+  return sum;
 }
 
 int32_t fem_explicit_step(const FemElementView<Real>& elements, const FemNodeView& nodes, const FemStepConstants& constants,

@@ -3,12 +3,12 @@
 #include "ctsurg/sim/base/parallel.h"
 #include "fem_cpu_kernels.h"
 #include "fem_rigid_modes.h"
+#include "sparse_cholesky.h"
 
 #include "ctsurg/core/error.h"
 
 #include <Eigen/Cholesky>
 #include <Eigen/OrderingMethods>
-#include <Eigen/SparseCholesky>
 #include <Eigen/SparseCore>
 
 #include <algorithm>
@@ -38,7 +38,7 @@ struct FemLinearStaticSolver::Impl {
   std::vector<int32_t> support_rows;        // components (3 node + axis) of supported used nodes
   SpMat k;                                  // s x s, both triangles
   Eigen::SparseMatrix<double, Eigen::RowMajor, int> k_support;  // support_rows x s (reactions)
-  Eigen::SimplicialLDLT<SpMat, Eigen::Lower, Eigen::AMDOrdering<int>> ldlt;
+  SparseCholesky cholesky{kWhere};           // K_ss (CHOLMOD, sparse_cholesky.h)
   std::vector<std::array<int32_t, 3>> node_columns;  // #N: column slot per axis, -1 = none (yet)
   std::vector<uint8_t> has_columns;                  // #N
   std::vector<Eigen::VectorXd> columns;              // K_ss^-1 e_j per slot
@@ -51,6 +51,8 @@ struct FemLinearStaticSolver::Impl {
       : model(m), options(o), threads(o.threads > 0 ? o.threads : cpu::thread_count(0, m.tet_count())) {
     const auto t0 = Clock::now();
     const int32_t n = m.node_count();
+    if (m.order != 1)
+      throw InputError(kWhere, "order", "the condensed solver is for linear tets; quadratic ones solve with solve_fem_static");
     if (m.material.model != FemMaterialModel::linear)
       throw InputError(kWhere, "material", "the factorised solver is for the linear material only (its K is constant); use solve_fem_static for St. Venant-Kirchhoff or Neo-Hookean");
     if (!supports.prescribed_nodes.empty() || !supports.prescribed_displacements.empty())
@@ -104,15 +106,16 @@ struct FemLinearStaticSolver::Impl {
     k.setFromTriplets(kt.begin(), kt.end());
     k_support.resize(static_cast<Eigen::Index>(support_rows.size()), s);
     k_support.setFromTriplets(rt.begin(), rt.end());
-    ldlt.compute(k);
-    if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().minCoeff() > 0))
+    k.makeCompressed();
+    cholesky.analyze(s, k.outerIndexPtr(), k.innerIndexPtr());
+    if (cholesky.factorize(k.valuePtr()) >= 0)
       throw InputError(kWhere, "boundary conditions",
                        "the stiffness matrix is not positive definite under these supports (a part of the mesh is not "
                        "connected to any fixed node?); fix nodes on every connected part");
     node_columns.assign(n, {-1, -1, -1});
     has_columns.assign(n, 0);
     stats.free_components = s;
-    stats.factor_nonzeros = ldlt.matrixL().nestedExpression().nonZeros();
+    stats.factor_nonzeros = cholesky.factor_nonzeros();
     stats.factor_seconds = seconds_since(t0);
   }
 
@@ -134,12 +137,11 @@ struct FemLinearStaticSolver::Impl {
     const auto t0 = Clock::now();
     columns.resize(columns.size() + todo.size());
     const int64_t count = static_cast<int64_t>(todo.size());
-#pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
-    for (int64_t t = 0; t < count; ++t) {
-      Eigen::VectorXd e = Eigen::VectorXd::Zero(k.rows());
-      e[todo[t].second] = 1;
-      columns[todo[t].first] = ldlt.solve(e);
-    }
+    // All the new columns in one multi-right-hand-side solve (BLAS 3 over the supernodes).
+    Eigen::MatrixXd e = Eigen::MatrixXd::Zero(k.rows(), count);
+    for (int64_t t = 0; t < count; ++t) e(todo[t].second, t) = 1;
+    cholesky.solve(e.data(), e.data(), static_cast<int32_t>(count));
+    for (int64_t t = 0; t < count; ++t) columns[todo[t].first] = e.col(t);
     stats.columns += count;
     stats.column_seconds += seconds_since(t0);
   }
@@ -210,13 +212,14 @@ struct FemLinearStaticSolver::Impl {
           for (int32_t i = 0; i < n; ++i)
             for (int a = 0; a < 3; ++a)
               if (free_index[3 * i + a] >= 0) mg[free_index[3 * i + a]] = model.node_mass[i] * loads.gravity[a];
-          gravity_column = ldlt.solve(mg);
+          gravity_column.resize(s);
+          cholesky.solve(mg.data(), gravity_column.data());
           gravity_cached = loads.gravity;
         }
         u += gravity_column;
       }
     } else {
-      u = ldlt.solve(f);
+      cholesky.solve(f.data(), u.data());
     }
 
     // The grab: prescribed free components p, their targets, and C_pp's factor (kept per node set).
@@ -270,7 +273,8 @@ struct FemLinearStaticSolver::Impl {
     for (int it = 0; it < options.max_refinements && rnorm > goal; ++it) {  // one refinement: u += K_ff^-1 (-r_f)
       Eigen::VectorXd rf = -r;
       for (int32_t j : p) rf[j] = 0;
-      Eigen::VectorXd du = ldlt.solve(rf);
+      Eigen::VectorXd du(s);
+      cholesky.solve(rf.data(), du.data());
       constrain(du, p, slots, Eigen::VectorXd::Zero(static_cast<Eigen::Index>(p.size())));
       uu.col(0) += du;
       for (std::size_t i = 0; i < p.size(); ++i) uu(p[i], 0) = target[static_cast<Eigen::Index>(i)];

@@ -14,14 +14,15 @@ const char* fem_material_model_name(FemMaterialModel model) {
     case FemMaterialModel::linear: return "linear";
     case FemMaterialModel::stvk: return "stvk";
     case FemMaterialModel::neo_hookean: return "neo_hookean";
+    case FemMaterialModel::corotational: return "corotational";
   }
   return "unknown";
 }
 
 void validate_fem_material(const FemMaterial& m, const char* where) {
   const int32_t id = static_cast<int32_t>(m.model);
-  if (id < kFemLinear || id > kFemNeoHookean)
-    throw InputError(where, "model", "must be linear, stvk or neo_hookean, got id " + std::to_string(id));
+  if (id < kFemLinear || id > kFemCorotational)
+    throw InputError(where, "model", "must be linear, stvk, neo_hookean or corotational, got id " + std::to_string(id));
   if (!(std::isfinite(m.youngs_modulus) && m.youngs_modulus > 0))
     throw InputError(where, "youngs_modulus", "Young's modulus must be finite and > 0 Pa, got " + std::to_string(m.youngs_modulus));
   if (!(std::isfinite(m.poisson_ratio) && m.poisson_ratio > -1 && m.poisson_ratio < 0.5))
@@ -44,7 +45,7 @@ bool first_piola_kirchhoff(FemMaterialModel model, const LameParameters& lame, c
 }
 
 double strain_energy_density(FemMaterialModel model, const LameParameters& lame, const std::array<double, 9>& F) {
-  if (model == FemMaterialModel::neo_hookean && !(det3(F.data()) > 0)) return HUGE_VAL;
+  if ((model == FemMaterialModel::neo_hookean || model == FemMaterialModel::corotational) && !(det3(F.data()) > 0)) return HUGE_VAL;
   return fem_energy_density<double>(static_cast<int32_t>(model), lame.mu, lame.lambda, F.data());
 }
 

@@ -1,11 +1,13 @@
 #include "ctsurg/sim/fem/fem_model.h"
 
 #include "ctsurg/sim/fem/kernels/fem_element_impl.h"
+#include "ctsurg/sim/fem/kernels/fem_quadratic_element_impl.h"
 
 #include "ctsurg/core/error.h"
 #include "ctsurg/core/tet_mesh_file.h"
 
 #include <algorithm>
+#include <climits>
 #include <cmath>
 #include <numeric>
 #include <sstream>
@@ -98,11 +100,86 @@ FemModel build_fem_model(const std::vector<double>& nodes, const std::vector<int
     }
   for (int32_t i = 0; i < n; ++i)
     if (m.node_offsets[i + 1] == m.node_offsets[i]) ++m.unused_nodes;
+  m.node_load = m.node_mass;
+  m.vertex_count = n;
   return m;
 }
 
 FemModel build_fem_model(const TetMesh& mesh, const FemMaterial& material) {
   return build_fem_model(mesh.nodes, mesh.tets, material);
+}
+
+FemModel build_quadratic_fem_model(const std::vector<double>& nodes, const std::vector<int32_t>& tets, const FemMaterial& material) {
+  FemModel m = build_fem_model(nodes, tets, material);  // checks, volumes, B of the corners
+  const int32_t n1 = m.node_count(), t_count = m.tet_count();
+  // Slot forces are indexed 30 e + 3 a in int32 (fem_forces_impl.h).
+  if (t_count > INT32_MAX / 30) throw InputError(kWhere, "tets", "mesh too large for quadratic tets: at most " + std::to_string(INT32_MAX / 30) + " tets");
+  // Edge nodes, numbered as first met; each vertex's edges to higher vertices in a small sorted list.
+  std::vector<std::vector<std::pair<int32_t, int32_t>>> edges_of(static_cast<std::size_t>(n1));
+  std::vector<int32_t> tets10(10 * static_cast<std::size_t>(t_count));
+  int32_t next = n1;
+  for (int32_t e = 0; e < t_count; ++e) {
+    const int32_t* t = &tets[4 * static_cast<std::size_t>(e)];
+    for (int a = 0; a < 4; ++a) tets10[10 * static_cast<std::size_t>(e) + a] = t[a];
+    for (int k = 0; k < 6; ++k) {
+      int i, j;
+      fem_quadratic_edge(k, i, j);
+      const int32_t lo = std::min(t[i], t[j]), hi = std::max(t[i], t[j]);
+      auto& list = edges_of[static_cast<std::size_t>(lo)];
+      auto it = std::lower_bound(list.begin(), list.end(), std::make_pair(hi, INT32_MIN));
+      if (it == list.end() || it->first != hi) {
+        if (next == INT32_MAX / 4) throw InputError(kWhere, "tets", "mesh too large for quadratic tets (32-bit node ids)");
+        it = list.insert(it, {hi, next++});
+      }
+      tets10[10 * static_cast<std::size_t>(e) + 4 + k] = it->second;
+    }
+  }
+  m.nodes.resize(3 * static_cast<std::size_t>(next));
+  for (int32_t lo = 0; lo < n1; ++lo)
+    for (const auto& [hi, id] : edges_of[static_cast<std::size_t>(lo)])
+      for (int c = 0; c < 3; ++c) m.nodes[3 * static_cast<std::size_t>(id) + c] = 0.5 * (nodes[3 * lo + c] + nodes[3 * hi + c]);
+  m.order = 2;
+  m.tets = std::move(tets10);
+  // Masses, loads and the node -> slot CSR over the 10 slots.
+  const int32_t n = next;
+  m.node_mass.assign(n, 0.0);
+  m.node_load.assign(n, 0.0);
+  m.node_offsets.assign(n + 1, 0);
+  for (int32_t v : m.tets) ++m.node_offsets[v + 1];
+  std::partial_sum(m.node_offsets.begin(), m.node_offsets.end(), m.node_offsets.begin());
+  m.node_corners.resize(m.tets.size());
+  std::vector<int32_t> fill(m.node_offsets.begin(), m.node_offsets.end() - 1);
+  for (int32_t e = 0; e < t_count; ++e) {
+    const double rv = material.density * m.rest_volume[e];
+    for (int a = 0; a < 10; ++a) {
+      const int32_t v = m.tets[10 * static_cast<std::size_t>(e) + a];
+      m.node_corners[fill[v]++] = 10 * e + a;
+      m.node_mass[v] += a < 4 ? rv / 36 : rv * 4 / 27;
+      m.node_load[v] += a < 4 ? -rv / 20 : rv / 5;
+    }
+  }
+  m.unused_nodes = 0;
+  for (int32_t i = 0; i < n; ++i)
+    if (m.node_offsets[i + 1] == m.node_offsets[i]) ++m.unused_nodes;
+  return m;
+}
+
+FemModel build_quadratic_fem_model(const TetMesh& mesh, const FemMaterial& material) {
+  return build_quadratic_fem_model(mesh.nodes, mesh.tets, material);
+}
+
+int32_t fem_edge_node(const FemModel& model, int32_t i, int32_t j) {
+  if (model.order != 2 || i < 0 || j < 0 || i >= model.vertex_count || j >= model.vertex_count || i == j) return -1;
+  for (int32_t k = model.node_offsets[i]; k < model.node_offsets[i + 1]; ++k) {
+    const int32_t e = model.node_corners[k] / 10;
+    const int32_t* t = &model.tets[10 * static_cast<std::size_t>(e)];
+    for (int s = 0; s < 6; ++s) {
+      int a, b;
+      fem_quadratic_edge(s, a, b);
+      if ((t[a] == i && t[b] == j) || (t[a] == j && t[b] == i)) return t[4 + s];
+    }
+  }
+  return -1;
 }
 
 double fem_total_volume(const FemModel& model) {

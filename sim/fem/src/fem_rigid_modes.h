@@ -5,7 +5,10 @@
 
 #include "ctsurg/sim/fem/fem_model.h"
 
+#include <Eigen/Core>
+
 #include <cstdint>
+#include <string>
 #include <vector>
 
 namespace ctsurg::sim {
@@ -14,8 +17,16 @@ namespace ctsurg::sim {
 // diagonal (mm, to scale positions). The Gram matrix of the rigid modes (3 translations, 3 rotations
 // about the mesh centre) restricted to the held rows of nodes that some tet uses must be well
 // conditioned (smallest eigenvalue > 1e-10 x largest); otherwise throws InputError(where, "boundary
-// conditions", ...) saying that a rigid motion is free and what to fix.
+// conditions", ...) naming each free rigid motion (a translation along an axis, a rotation about an
+// axis through a point in mm) and what to fix.
+// The rigid motions that `held` leaves free, in words (rigid_mode_text; empty: none); held_rows: the
+// number of held components of used nodes.
+std::vector<std::string> free_rigid_modes(const FemModel& model, const std::vector<uint8_t>& held, double diag, int64_t* held_rows = nullptr);
 void check_rigid_modes(const FemModel& model, const std::vector<uint8_t>& held, double diag, const char* where);
+
+// A rigid velocity field v(x) = t + w x (x - centre) / diag in words: "translation along x", "rotation
+// about the axis along z through (1.0, 2.0, 3.0) mm".
+std::string rigid_mode_text(const Eigen::Vector3d& t, const Eigen::Vector3d& w, const Eigen::Vector3d& centre, double diag);
 
 // The diagonal of the rest nodes' bounding box, mm.
 double fem_bounding_diagonal(const FemModel& model);

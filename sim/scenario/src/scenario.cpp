@@ -94,7 +94,7 @@ ToolAction tool_of(const YamlField& item) {
 }
 
 FixedRegionSpec fixed_of(const YamlField& item) {
-  item.only({"box", "box_fraction", "half_space", "label"});
+  item.only({"box", "box_fraction", "half_space", "label", "axes"});
   FixedRegionSpec r;
   int given = 0;
   const auto box_of = [&](const YamlField& b) {
@@ -129,7 +129,35 @@ FixedRegionSpec fixed_of(const YamlField& item) {
     ++given;
   }
   if (given != 1) item.fail("each fixed region is exactly one of box, box_fraction, half_space, label");
+  if (item.has("axes")) {
+    // Rollers and symmetry planes: only these components are held.
+    r.axes = 0;
+    const auto axes = item.child("axes").items();
+    if (axes.empty()) item.child("axes").fail("name at least one of x, y, z");
+    for (const auto& a : axes) {
+      const std::string axis = a.one_of({"x", "y", "z"});
+      const uint8_t bit = static_cast<uint8_t>(1u << (axis[0] - 'x'));
+      if (r.axes & bit) a.fail("'" + axis + "' is named twice");
+      r.axes |= bit;
+    }
+  }
   return r;
+}
+
+SolverSpec solver_of(const YamlField& f) {
+  f.only({"linear", "tolerance_mm", "max_newton_iterations", "max_cg_iterations"});
+  SolverSpec s;
+  if (f.has("linear")) {
+    const std::string kind = f.child("linear").one_of({"auto", "direct", "iterative"});
+    s.linear = kind == "direct" ? FemLinearSolve::direct : kind == "iterative" ? FemLinearSolve::iterative : FemLinearSolve::automatic;
+  }
+  if (f.has("tolerance_mm")) {
+    s.tolerance_mm = f.child("tolerance_mm").positive();
+    if (s.tolerance_mm > 10) f.child("tolerance_mm").fail("must be <= 10 mm (a budget, not a displacement)");
+  }
+  if (f.has("max_newton_iterations")) s.max_newton_iterations = static_cast<int>(f.child("max_newton_iterations").integer(1, 1000));
+  if (f.has("max_cg_iterations")) s.max_cg_iterations = static_cast<int>(f.child("max_cg_iterations").integer(0, 100000000));
+  return s;
 }
 
 }  // namespace
@@ -144,7 +172,8 @@ std::string describe_scenario(const Scenario& s) {
   j["model"] = to_string(s.model);
   if (s.model == ModelKind::fem) {
     j["material_law"] = fem_material_model_name(s.material_law);
-    j["solver"] = s.fem_solver == FemSolver::dynamic ? "dynamic" : "static";
+    j["solver"] = s.fem_solver == FemSolver::dynamic ? "dynamic" : s.fem_solver == FemSolver::implicit ? "implicit" : "static";
+    j["elements"] = s.fem_order == 2 ? "quadratic" : "linear";
   }
   nlohmann::json inputs = nlohmann::json::object();
   const ModelInputs read = model_inputs(s);
@@ -173,14 +202,14 @@ static Scenario parse_fields(const std::string& text, const fs::path& file, cons
   const YamlField top(doc, "", &name);
   if (!top.is_map()) top.fail("a scenario is a map of sections (name, model, material, time, output, ...)");
   top.only({"ctsurg_scenario", "name", "model", "material", "gravity_mm_per_s2", "fixed", "tools", "time", "output",
-            "render", "backend", "threads"});
+            "render", "backend", "threads", "solver"});
   Scenario s;
   s.file = file;
   if (top.child("ctsurg_scenario").integer(1, 1000) != 1) top.child("ctsurg_scenario").fail("this ctsurg reads version 1");
   s.name = top.has("name") ? top.child("name").text() : file.stem().string();
 
   const YamlField m = top.child("model");
-  m.only({"kind", "grid", "surface", "tetmesh", "springs_from", "coupling", "mass_from_fraction", "material_law", "solver"});
+  m.only({"kind", "grid", "surface", "tetmesh", "springs_from", "coupling", "mass_from_fraction", "material_law", "solver", "elements"});
   const std::string kind = m.child("kind").one_of({"spring_grid", "explicit_springs", "fem"});
   s.model = kind == "spring_grid" ? ModelKind::spring_grid : kind == "fem" ? ModelKind::fem : ModelKind::explicit_springs;
   if (s.model != ModelKind::fem || m.has("grid")) s.grid = resolve(base_dir, m.child("grid").text());
@@ -188,12 +217,21 @@ static Scenario parse_fields(const std::string& text, const fs::path& file, cons
     if (s.model != ModelKind::fem) m.child(m.has("solver") ? "solver" : "material_law").fail("only for kind: fem");
   }
   if (m.has("material_law")) {
-    const std::string law = m.child("material_law").one_of({"linear", "stvk", "neo_hookean"});
-    s.material_law = law == "linear" ? FemMaterialModel::linear : law == "stvk" ? FemMaterialModel::stvk : FemMaterialModel::neo_hookean;
+    const std::string law = m.child("material_law").one_of({"linear", "stvk", "neo_hookean", "corotational"});
+    s.material_law = law == "linear"         ? FemMaterialModel::linear
+                     : law == "stvk"         ? FemMaterialModel::stvk
+                     : law == "corotational" ? FemMaterialModel::corotational
+                                             : FemMaterialModel::neo_hookean;
   }
   if (m.has("solver")) {
-    s.fem_solver = m.child("solver").one_of({"dynamic", "static"}) == std::string("static") ? FemSolver::static_equilibrium
-                                                                                             : FemSolver::dynamic;
+    const std::string solver = m.child("solver").one_of({"dynamic", "static", "implicit"});
+    s.fem_solver = solver == "static" ? FemSolver::static_equilibrium : solver == "implicit" ? FemSolver::implicit : FemSolver::dynamic;
+  }
+  if (m.has("elements")) {
+    if (s.model != ModelKind::fem) m.child("elements").fail("only for kind: fem");
+    s.fem_order = m.child("elements").one_of({"linear", "quadratic"}) == std::string("quadratic") ? 2 : 1;
+    if (s.fem_order == 2 && s.fem_solver == FemSolver::dynamic)
+      m.child("elements").fail("quadratic tets need solver: static or implicit (the explicit dynamics runs linear tets)");
   }
   if (m.has("surface")) s.surface = resolve(base_dir, m.child("surface").text());
   if (m.has("springs_from")) {
@@ -212,7 +250,7 @@ static Scenario parse_fields(const std::string& text, const fs::path& file, cons
   if (m.has("mass_from_fraction")) s.mass_from_fraction = m.child("mass_from_fraction").boolean();
 
   const YamlField mat = top.child("material");
-  mat.only({"preset", "youngs_modulus_pa", "poisson_ratio", "density_g_per_cm3", "damping_per_s"});
+  mat.only({"preset", "youngs_modulus_pa", "poisson_ratio", "density_g_per_cm3", "damping_per_s", "stiffness_damping_s"});
   s.material = mat.has("preset") ? material_preset(mat.child("preset").text(), name, mat.child("preset").path())
                                  : Material{"custom", 0, 0.45, 1.06e-3, "scenario"};
   if (mat.has("youngs_modulus_pa")) s.material.youngs_modulus_pa = mat.child("youngs_modulus_pa").positive();
@@ -225,10 +263,21 @@ static Scenario parse_fields(const std::string& text, const fs::path& file, cons
   }
   validate_material(s.material, name);
   if (mat.has("damping_per_s")) s.damping_per_s = mat.child("damping_per_s").non_negative();
+  if (mat.has("stiffness_damping_s")) {
+    if (s.model != ModelKind::fem || s.fem_solver != FemSolver::implicit)
+      mat.child("stiffness_damping_s").fail("only for kind: fem with solver: implicit (Rayleigh stiffness damping)");
+    s.stiffness_damping_s = mat.child("stiffness_damping_s").non_negative();
+  }
 
   if (top.has("gravity_mm_per_s2")) s.gravity = top.child("gravity_mm_per_s2").vec3();
   if (top.has("fixed")) {
-    for (const auto& item : top.child("fixed").items()) s.fixed.push_back(fixed_of(item));
+    for (const auto& item : top.child("fixed").items()) {
+      s.fixed.push_back(fixed_of(item));
+      if (s.fixed.back().axes != 7 && s.model == ModelKind::fem && s.fem_solver == FemSolver::dynamic) {
+        item.child("axes").fail("fixing some axes only needs solver: static or implicit for kind: fem (the explicit "
+                                "dynamics fixes whole nodes)");
+      }
+    }
   }
   if (top.has("tools")) {
     for (const auto& item : top.child("tools").items()) {
@@ -238,9 +287,8 @@ static Scenario parse_fields(const std::string& text, const fs::path& file, cons
       if (s.model == ModelKind::fem && s.tools.back().kind == ToolKind::cut) {
         item.fail("cut needs a spring model (kind: spring_grid or explicit_springs); the FEM models do not cut");
       }
-      if (s.model == ModelKind::fem && s.fem_solver == FemSolver::static_equilibrium &&
-          s.tools.back().kind == ToolKind::probe) {
-        item.fail("probe needs solver: dynamic (contact is not part of the static solver)");
+      if (s.model == ModelKind::fem && s.fem_solver != FemSolver::dynamic && s.tools.back().kind == ToolKind::probe) {
+        item.fail("probe needs solver: dynamic (contact is part of the explicit dynamics only, not of the static or implicit solvers)");
       }
     }
   }
@@ -307,6 +355,11 @@ static Scenario parse_fields(const std::string& text, const fs::path& file, cons
   }
   if (top.has("backend")) s.backend = top.child("backend").one_of({"cpu", "cuda", "auto"});
   if (top.has("threads")) s.threads = static_cast<int>(top.child("threads").integer(0, 1024));
+  if (top.has("solver")) {
+    if (s.model != ModelKind::fem || s.fem_solver == FemSolver::dynamic)
+      top.child("solver").fail("only for kind: fem with solver: static or implicit (the Newton solves' settings)");
+    s.solver = solver_of(top.child("solver"));
+  }
   return s;
 }
 

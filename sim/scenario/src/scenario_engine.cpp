@@ -8,6 +8,7 @@
 #include "ctsurg/sim/base/fixed_regions.h"
 #include "ctsurg/sim/fem/fem_engine.h"
 #include "ctsurg/sim/fem/fem_explicit_dynamics.h"
+#include "ctsurg/sim/fem/kernels/fem_quadratic_element_impl.h"
 #include "ctsurg/sim/scenario/scenario_model.h"
 #include "ctsurg/sim/springs/spring_calibration.h"
 #include "ctsurg/sim/springs/spring_engine.h"
@@ -17,7 +18,6 @@
 
 #include <cmath>
 #include <optional>
-#include <set>
 
 namespace ctsurg::sim {
 namespace {
@@ -25,12 +25,19 @@ namespace {
 // The run's local origin: the whole-millimetre point nearest `centre` (LPS mm).
 Vec3 local_origin(const Vec3& centre) { return {std::round(centre[0]), std::round(centre[1]), std::round(centre[2])}; }
 
-// The union (increasing ids) of the scenario's fixed regions over the rest positions `rest` (#P x 3,
-// local frame: LPS minus `origin`); `bounds`: the box that box_fraction refers to; `by_label` selects a
-// label's particles. InputError naming "fixed[r]" when a region selects nothing.
-std::vector<int32_t> fixed_particles(const Scenario& s, const std::vector<Real>& rest, const RestBounds& bounds,
-                                     const Vec3& origin, const std::function<std::vector<int32_t>(uint16_t)>& by_label) {
-  std::set<int32_t> fixed;
+// What the scenario's fixed regions hold: the whole particles (or nodes; increasing ids) and, for
+// regions that fix some axes only, single components (3 id + axis, increasing; not of whole ones).
+struct Held {
+  std::vector<int32_t> whole;
+  std::vector<int32_t> components;
+};
+
+// The scenario's fixed regions over the rest positions `rest` (#P x 3, local frame: LPS minus
+// `origin`); `bounds`: the box that box_fraction refers to; `by_label` selects a label's particles.
+// InputError naming "fixed[r]" when a region selects nothing.
+Held fixed_particles(const Scenario& s, const std::vector<Real>& rest, const RestBounds& bounds, const Vec3& origin,
+                     const std::function<std::vector<int32_t>(uint16_t)>& by_label) {
+  std::vector<uint8_t> axes(rest.size() / 3, 0);
   for (size_t r = 0; r < s.fixed.size(); ++r) {
     const auto& f = s.fixed[r];
     std::vector<int32_t> ids;
@@ -51,9 +58,18 @@ std::vector<int32_t> fixed_particles(const Scenario& s, const std::vector<Real>&
       case FixedRegionSpec::Kind::label: ids = by_label(f.label); break;
     }
     if (ids.empty()) throw InputError(s.file.string(), "fixed[" + std::to_string(r) + "]", "selects no particle or node of the model");
-    fixed.insert(ids.begin(), ids.end());
+    for (const int32_t id : ids) axes[static_cast<size_t>(id)] |= f.axes;
   }
-  return {fixed.begin(), fixed.end()};
+  Held held;
+  for (size_t i = 0; i < axes.size(); ++i) {
+    if (axes[i] == 7) {
+      held.whole.push_back(static_cast<int32_t>(i));
+      continue;
+    }
+    for (int a = 0; a < 3; ++a)
+      if (axes[i] >> a & 1) held.components.push_back(static_cast<int32_t>(3 * i) + a);
+  }
+  return held;
 }
 
 // The options every engine takes, from the scenario (the step is the engine's own business: the FEM's
@@ -126,9 +142,10 @@ ScenarioEngine spring_engine(const Scenario& s, Backend backend, const std::func
   }
   const std::vector<Real>& rest = std::visit([](const auto& m) -> const std::vector<Real>& { return m.rest_positions; }, model);
   ParticleState state = std::visit([](const auto& m) { return m.make_state(); }, model);
-  fix_particles(state, fixed_particles(s, rest, bounds_of(rest), origin, [&](uint16_t label) {
-                  return grid_model ? particles_with_label(*grid_model, grid.label, label) : nodes_with_label(*tetmesh, label);
-                }));
+  const Held held = fixed_particles(s, rest, bounds_of(rest), origin, [&](uint16_t label) {
+    return grid_model ? particles_with_label(*grid_model, grid.label, label) : nodes_with_label(*tetmesh, label);
+  });
+  fix_particles(state, held.whole);
 
   ScenarioEngine r;
   EmbeddedSurface surface;
@@ -148,7 +165,11 @@ ScenarioEngine spring_engine(const Scenario& s, Backend backend, const std::func
   }
   EngineOptions o = engine_options(s, note);
   o.dt = s.dt_s;
+  if (backend == Backend::cuda && !held.components.empty()) {
+    throw InputError(sfile, "fixed", "fixing some axes only runs on the cpu backend for spring models; set backend: cpu");
+  }
   auto engine = std::make_unique<SpringEngine>(std::move(model), std::move(state), std::move(surface), origin, o, backend);
+  engine->hold_components(held.components);
   const double critical = engine->counts().critical_dt_s;
   if (note) {
     if (s.dt_s > 0 && s.dt_s > critical) {
@@ -175,12 +196,33 @@ ScenarioEngine fem_engine(const Scenario& s, Backend backend, const std::functio
   material.youngs_modulus = s.material.youngs_modulus_pa;
   material.poisson_ratio = s.material.poisson_ratio;
   material.density = s.material.density;
-  FemModel model = build_fem_model(mesh, material);
+  FemModel model = s.fem_order == 2 ? build_quadratic_fem_model(mesh, material) : build_fem_model(mesh, material);
+  model.frame_origin = {origin[0], origin[1], origin[2]};
   // Fixed regions: the rest positions in float (as the spring models select them), the fractions of
-  // the double-precision box.
+  // the double-precision box. A label holds the edge nodes of a quadratic model between its nodes.
   const std::vector<Real> rest_real(model.nodes.begin(), model.nodes.end());
-  std::vector<int32_t> fixed_nodes =
-      fixed_particles(s, rest_real, bounds_of(model.nodes), origin, [&](uint16_t label) { return nodes_with_label(mesh, label); });
+  const auto with_label = [&](uint16_t label) {
+    std::vector<int32_t> ids = nodes_with_label(mesh, label);
+    if (model.order != 2) return ids;
+    std::vector<uint8_t> in(static_cast<size_t>(model.node_count()), 0);
+    for (const int32_t i : ids) in[static_cast<size_t>(i)] = 1;
+    for (int32_t e = 0; e < model.tet_count(); ++e) {
+      const int32_t* t = &model.tets[10 * static_cast<size_t>(e)];
+      for (int k = 0; k < 6; ++k) {
+        int a, b;
+        fem_quadratic_edge(k, a, b);
+        if (in[static_cast<size_t>(t[a])] && in[static_cast<size_t>(t[b])]) in[static_cast<size_t>(t[4 + k])] = 1;
+      }
+    }
+    ids.clear();
+    for (int32_t i = 0; i < model.node_count(); ++i)
+      if (in[static_cast<size_t>(i)]) ids.push_back(i);
+    return ids;
+  };
+  const Held held = fixed_particles(s, rest_real, bounds_of(model.nodes), origin, with_label);
+  FemBoundaryConditions supports;
+  supports.fixed_nodes = held.whole;
+  supports.fixed_components = held.components;
 
   ScenarioEngine r;
   EmbeddedSurface surface;
@@ -192,6 +234,12 @@ ScenarioEngine fem_engine(const Scenario& s, Backend backend, const std::functio
   FemEngineOptions o;
   static_cast<EngineOptions&>(o) = engine_options(s, note);
   o.solver = s.fem_solver;
+  o.stiffness_damping = s.stiffness_damping_s;
+  o.newton.linear_solve = s.solver.linear;
+  o.newton.tolerance_mm = s.solver.tolerance_mm;
+  o.newton.max_newton_iterations = s.solver.max_newton_iterations;
+  o.newton.cg_max_iterations = s.solver.max_cg_iterations;
+  if (s.fem_solver == FemSolver::implicit) o.dt = s.dt_s;  // 0: a frame's 1/60 s
   std::optional<FemCriticalStep> crit;
   if (s.fem_solver == FemSolver::dynamic) {
     crit = fem_critical_time_step(model, s.safety_factor);
@@ -202,7 +250,7 @@ ScenarioEngine fem_engine(const Scenario& s, Backend backend, const std::functio
                                               ", " + std::to_string(crit->length) + " mm); use auto or a smaller step");
     }
   }
-  auto engine = std::make_unique<FemEngine>(std::move(model), std::move(fixed_nodes), std::move(surface), origin, o, backend);
+  auto engine = std::make_unique<FemEngine>(std::move(model), std::move(supports), std::move(surface), origin, o, backend);
   if (crit && note) {
     note("FEM " + std::string(fem_material_model_name(s.material_law)) + " explicit dynamics, dt " + std::to_string(engine->dt()) +
          " s (critical " + std::to_string(crit->critical) + " s, element " + std::to_string(crit->element) + ")");

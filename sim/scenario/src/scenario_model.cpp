@@ -16,8 +16,8 @@ std::string model_label(const Scenario& s) {
     case ModelKind::explicit_springs:
       return s.springs_from == SpringSource::grid ? "explicit_springs (grid)" : "explicit_springs (tetmesh)";
     case ModelKind::fem:
-      return std::string("fem ") + fem_material_model_name(s.material_law) +
-             (s.fem_solver == FemSolver::dynamic ? " (dynamic)" : " (static)");
+      return std::string("fem ") + fem_material_model_name(s.material_law) + (s.fem_order == 2 ? " quadratic" : "") +
+             (s.fem_solver == FemSolver::dynamic ? " (dynamic)" : s.fem_solver == FemSolver::implicit ? " (implicit)" : " (static)");
   }
   return "?";
 }

@@ -72,6 +72,7 @@ Trajectory run(const Scenario& s, ScenarioEngine built, RunReport& report, const
   const auto start = std::chrono::steady_clock::now();
   engine.sync();
   recorder.record(engine, timeline, 0.0);
+  report.frame_wall_s.assign(1, 0.0);
   // The last frame, for restarts with half the step; kept only when the run may restart.
   const bool restartable = s.max_step_halvings > 0 && engine.can_restart();
   ToolTimeline checkpoint_timeline = timeline;
@@ -117,6 +118,7 @@ Trajectory run(const Scenario& s, ScenarioEngine built, RunReport& report, const
       engine.restart_halved();
       timeline = checkpoint_timeline;
       recorder.truncate(checkpoint_frames);
+      report.frame_wall_s.resize(checkpoint_frames);
       next_frame = static_cast<int64_t>(checkpoint_frames);
       ++halvings;
       note("unstable at t = " + std::to_string(check.time) + " s: restarted from t = " + std::to_string(engine.time()) +
@@ -126,6 +128,7 @@ Trajectory run(const Scenario& s, ScenarioEngine built, RunReport& report, const
     if (frame_due) {
       engine.sync();
       recorder.record(engine, timeline, engine.time());
+      report.frame_wall_s.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
       ++next_frame;
       if (restartable) {
         engine.save_checkpoint();
@@ -155,7 +158,9 @@ Trajectory run(const Scenario& s, ScenarioEngine built, RunReport& report, const
 Trajectory run_scenario(const Scenario& s, RunReport* report_out, const std::function<void(double)>& progress,
                         const RunBudget& budget) {
   RunReport report;
+  const auto t0 = std::chrono::steady_clock::now();
   ScenarioEngine engine = make_scenario_engine(s, [&](const std::string& text) { report.notes.push_back(text); });
+  report.setup_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   Trajectory traj = run(s, std::move(engine), report, progress, budget);
   if (report_out) *report_out = std::move(report);
   return traj;

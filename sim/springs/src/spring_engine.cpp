@@ -110,9 +110,30 @@ void SpringEngine::note(const std::string& text) const {
   if (options_.note) options_.note(text);
 }
 
+void SpringEngine::hold_components(std::vector<int32_t> components) {
+  for (const int32_t c : components) {
+    if (c < 0 || c >= 3 * state_.count()) throw InputError(options_.where, "fixed", "component " + std::to_string(c) + " out of range");
+  }
+  if (!components.empty() && stepper_->on_device()) {
+    throw InputError(options_.where, "fixed", "fixing some axes only runs on the cpu backend for spring models; set backend: cpu");
+  }
+  held_components_ = std::move(components);
+  counts_.fixed = std::count(state_.inv_mass.begin(), state_.inv_mass.end(), Real(0));
+  std::vector<uint8_t> any(static_cast<size_t>(state_.count()), 0);
+  for (const int32_t c : held_components_) any[static_cast<size_t>(c / 3)] = 1;
+  for (int32_t i = 0; i < state_.count(); ++i)
+    if (any[static_cast<size_t>(i)] && state_.inv_mass[static_cast<size_t>(i)] != Real(0)) ++counts_.fixed;
+}
+
 StabilityReport SpringEngine::step(const std::vector<ToolInput>& tools, int steps) {
   for (int k = 0; k < steps; ++k) {
     stepper_->step(params_);
+    for (const int32_t c : held_components_) {
+      const size_t i = static_cast<size_t>(c / 3);
+      std::vector<Real>& x = c % 3 == 0 ? state_.x : c % 3 == 1 ? state_.y : state_.z;
+      std::vector<Real>& px = c % 3 == 0 ? state_.px : c % 3 == 1 ? state_.py : state_.pz;
+      x[i] = px[i] = rest_real_[static_cast<size_t>(c)];
+    }
     ++steps_;
     time_ += params_.dt;
     apply_tools(tools);

@@ -46,8 +46,9 @@ FemEngine static_engine(FemMaterialModel law, Backend backend, std::vector<std::
   o.solver = FemSolver::static_equilibrium;
   o.where = "s.yaml";
   if (notes) o.note = [notes](const std::string& n) { notes->push_back(n); };
-  std::vector<int32_t> fixed = test::nodes_where(m, 0, 0.0);
-  return FemEngine(std::move(m), std::move(fixed), top_surface(), {100, 200, 300}, o, backend);
+  FemBoundaryConditions supports;
+  supports.fixed_nodes = test::nodes_where(m, 0, 0.0);
+  return FemEngine(std::move(m), std::move(supports), top_surface(), {100, 200, 300}, o, backend);
 }
 
 TEST(FemEngine, QuasiStaticGrabHoldsTheGrabbedNodesAndTheSurfaceFollows) {
@@ -99,8 +100,9 @@ TEST(FemEngine, DynamicGrabMovesTheEndAndIdleStepsGoInBatches) {
   FemEngineOptions o;
   o.solver = FemSolver::dynamic;
   o.mass_damping = 200;
-  std::vector<int32_t> fixed = test::nodes_where(m, 0, 0.0);
-  FemEngine e(std::move(m), std::move(fixed), EmbeddedSurface(), {0, 0, 0}, o);
+  FemBoundaryConditions supports;
+  supports.fixed_nodes = test::nodes_where(m, 0, 0.0);
+  FemEngine e(std::move(m), std::move(supports), EmbeddedSurface(), {0, 0, 0}, o);
   EXPECT_FALSE(e.quasi_static());
   EXPECT_TRUE(e.batches_steps());
   EXPECT_GT(e.counts().critical_dt_s, e.dt());
@@ -137,8 +139,9 @@ TEST(FemEngine, DynamicGrabCapturesTheNodesWhereTheyAreNow) {
     o.solver = FemSolver::dynamic;
     o.mass_damping = 500;
     o.gravity = {0, 0, -9810};
-    std::vector<int32_t> fixed = test::nodes_where(m, 0, 0.0);
-    return std::make_unique<FemEngine>(std::move(m), std::move(fixed), EmbeddedSurface(), Vec3{0, 0, 0}, o);
+    FemBoundaryConditions supports;
+    supports.fixed_nodes = test::nodes_where(m, 0, 0.0);
+    return std::make_unique<FemEngine>(std::move(m), std::move(supports), EmbeddedSurface(), Vec3{0, 0, 0}, o);
   };
   // Where the end is after 400 steps ...
   auto reference = sagging();
@@ -177,7 +180,7 @@ TEST(FemEngine, WhatTheFemDoesNotTakeIsRefusedWithTheField) {
   o.solver = FemSolver::static_equilibrium;
   o.where = "s.yaml";
   try {
-    FemEngine loose(test::fem_box_model(FemMaterialModel::linear, kCells, kSize), {}, EmbeddedSurface(), {0, 0, 0}, o);
+    FemEngine loose(test::fem_box_model(FemMaterialModel::linear, kCells, kSize), FemBoundaryConditions{}, EmbeddedSurface(), {0, 0, 0}, o);
     ADD_FAILURE() << "a static run with nothing fixed was accepted";
   } catch (const InputError& err) {
     EXPECT_EQ(err.file(), "s.yaml");

@@ -45,7 +45,8 @@ double max_abs(const std::vector<double>& v) {
 
 TEST(FemForces, LargeRigidRotationGivesNoForceForNonlinearModelsButSpuriousForLinear) {
   // A 90-degree rotation of an unloaded block. Force scale: E times a face area of ~4 mm^2 ~ 1e5 uN.
-  for (auto model : {FemMaterialModel::stvk, FemMaterialModel::neo_hookean, FemMaterialModel::linear}) {
+  for (auto model : {FemMaterialModel::stvk, FemMaterialModel::neo_hookean, FemMaterialModel::corotational,
+                     FemMaterialModel::linear}) {
     const FemModel m = block(model);
     std::vector<double> f;
     EXPECT_EQ(fem_internal_forces(m, rigid_motion(m, M_PI / 2), f), -1);

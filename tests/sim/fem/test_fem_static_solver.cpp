@@ -1,5 +1,8 @@
-// Tests of sim/fem_static_solver.h: patch test, cantilever against Euler-Bernoulli with refinement,
-// Neo-Hookean uniaxial stretch against the closed form, grabs, boundary-condition checks.
+// Tests of ctsurg/sim/fem/fem_static_solver.h: patch test, cantilever against Euler-Bernoulli with
+// refinement, Neo-Hookean uniaxial stretch against the closed form, grabs, boundary-condition checks;
+// direct (CHOLMOD) and iterative solves agreeing, the tolerance in millimetres, the projection of
+// indefinite tangents, a solver kept across solves reusing its factor, and a singular part of a mesh
+// named by its node.
 #include "ctsurg/sim/fem/fem_static_solver.h"
 
 #include "ctsurg/core/error.h"
@@ -129,8 +132,8 @@ TEST(FemStaticSolver, CantileverTipDeflectionConvergesToEulerBernoulli) {
     FemStaticReport rep;
     const double err = cantilever_error(n, FemMaterialModel::linear, &rep);
     std::printf("cantilever L/h = 10, %d x %d x %d cells (h/%d, %d tets, %d unknowns): tip deflection error %+.2f %% vs "
-                "Euler-Bernoulli, %d CG iterations (incomplete Cholesky), %.3f s\n",
-                10 * n, n, n, n, 60 * n * n * n, rep.free_components, 100 * err, rep.cg_iterations.at(0), rep.seconds);
+                "Euler-Bernoulli, %s solve, %.3f s\n",
+                10 * n, n, n, n, 60 * n * n * n, rep.free_components, 100 * err, rep.direct ? "direct" : "iterative", rep.seconds);
     EXPECT_LT(err, 0);  // stiffer than the beam
     if (!errors.empty()) {
       EXPECT_GT(err, errors.back());  // converging from below
@@ -270,6 +273,7 @@ TEST(FemStaticSolver, InexactNewtonReachesTheSameEquilibriumWithFewerCgIteration
     bc.prescribed_displacements.insert(bc.prescribed_displacements.end(), {0.0, 0.0, -1.5});
   }
   FemStaticOptions exact, inexact;
+  exact.linear_solve = inexact.linear_solve = FemLinearSolve::iterative;  // the forcing term is the CG's tolerance
   exact.inexact_newton = false;
   const auto a = solve_fem_static(m, bc, {}, exact);
   const auto b = solve_fem_static(m, bc, {}, inexact);
@@ -296,11 +300,32 @@ TEST(FemStaticSolver, MissingOrInsufficientBoundaryConditionsAreInputErrors) {
     FAIL();
   } catch (const InputError& e) {
     EXPECT_EQ(e.field(), "boundary conditions");
-    EXPECT_NE(std::string(e.what()).find("singular"), std::string::npos);
+    const std::string msg = e.what();
+    EXPECT_NE(msg.find("singular"), std::string::npos);
+    EXPECT_NE(msg.find("6 rigid motions free"), std::string::npos) << msg;
   }
-  FemBoundaryConditions collinear;  // three nodes on the x axis: the rotation about it stays free
+  // The free motions are named: three nodes on the x axis leave the rotation about it (the point is
+  // the axis's nearest to the mesh centre).
+  FemBoundaryConditions collinear;
   collinear.fixed_nodes = {0, 1, 2};
-  EXPECT_THROW(solve_fem_static(m, collinear, loads), InputError);
+  try {
+    solve_fem_static(m, collinear, loads);
+    FAIL();
+  } catch (const InputError& e) {
+    const std::string msg = e.what();
+    EXPECT_NE(msg.find("1 rigid motion free (rotation about the axis along x through (1.0, 0.0, 0.0) mm)"), std::string::npos) << msg;
+  }
+  // The x = 0 face held in x only (a roller) leaves the translations along y and z and the rotation about x.
+  FemBoundaryConditions roller;
+  for (int32_t i : nodes_where(m, 0, 0.0)) roller.fixed_components.push_back(3 * i);
+  try {
+    solve_fem_static(m, roller, loads);
+    FAIL();
+  } catch (const InputError& e) {
+    const std::string msg = e.what();
+    EXPECT_NE(msg.find("3 rigid motions free"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("rotation about the axis along x"), std::string::npos) << msg;
+  }
   FemBoundaryConditions bad;
   bad.fixed_nodes = {999};
   EXPECT_THROW(solve_fem_static(m, bad, loads), InputError);
@@ -321,12 +346,138 @@ TEST(FemStaticSolver, BothPreconditionersGiveTheSameAnswer) {
   FemLoads loads;
   loads.gravity = {0, 0, -9810.0};  // sags ~ 2 mm: a few Newton iterations
   FemStaticOptions o;
+  o.linear_solve = FemLinearSolve::iterative;  // the preconditioners are the conjugate gradients'
   o.preconditioner = FemPreconditioner::diagonal;
   const auto a = solve_fem_static(m, bc, loads, o);
   o.preconditioner = FemPreconditioner::incomplete_cholesky;
   const auto b = solve_fem_static(m, bc, loads, o);
   for (std::size_t d = 0; d < a.displacements.size(); ++d) EXPECT_NEAR(a.displacements[d], b.displacements[d], 1e-7);
   EXPECT_LT(b.report.cg_iterations.at(0), a.report.cg_iterations.at(0));
+}
+
+
+// A 10 mm cube, bottom fixed, the centre of its top grabbed and pushed down 1.5 mm (15 %).
+struct GrabbedCube {
+  FemModel model;
+  FemBoundaryConditions bc;
+};
+
+GrabbedCube grabbed_cube(FemMaterialModel law, double push = -1.5) {
+  const auto box = fem_box_mesh({5, 5, 5}, {10, 10, 10});
+  GrabbedCube c{build_fem_model(box.nodes, box.tets, material(law, 3e4, 0.45)), {}};
+  c.bc.fixed_nodes = nodes_where(c.model, 2, 0.0);
+  for (int32_t i : nodes_where(c.model, 2, 10.0)) {
+    if (std::hypot(c.model.nodes[3 * i] - 5, c.model.nodes[3 * i + 1] - 5) > 2.1) continue;
+    c.bc.prescribed_nodes.push_back(i);
+    c.bc.prescribed_displacements.insert(c.bc.prescribed_displacements.end(), {0.0, 0.0, push});
+  }
+  return c;
+}
+
+double largest_difference(const std::vector<double>& a, const std::vector<double>& b) {
+  double d = 0;
+  for (std::size_t i = 0; i < a.size(); ++i) d = std::max(d, std::abs(a[i] - b[i]));
+  return d;
+}
+
+TEST(FemStaticSolver, DirectAndIterativeSolvesAgree) {
+  for (const FemMaterialModel law : {FemMaterialModel::linear, FemMaterialModel::neo_hookean, FemMaterialModel::stvk,
+                                     FemMaterialModel::corotational}) {
+    SCOPED_TRACE(fem_material_model_name(law));
+    const GrabbedCube c = grabbed_cube(law);
+    FemStaticOptions direct, iterative;
+    direct.linear_solve = FemLinearSolve::direct;
+    iterative.linear_solve = FemLinearSolve::iterative;
+    const auto a = solve_fem_static(c.model, c.bc, {}, direct);
+    const auto b = solve_fem_static(c.model, c.bc, {}, iterative);
+    EXPECT_TRUE(a.report.direct);
+    EXPECT_FALSE(b.report.direct);
+    EXPECT_GE(a.report.factorizations, 1);
+    EXPECT_GT(a.report.factor_bytes, 0);
+    EXPECT_LT(largest_difference(a.displacements, b.displacements), 1e-6);  // both at ||r|| <= 1e-8 r_ref
+  }
+}
+
+TEST(FemStaticSolver, ToleranceInMillimetresStopsAtTheBudget) {
+  const GrabbedCube c = grabbed_cube(FemMaterialModel::neo_hookean);
+  const auto tight = solve_fem_static(c.model, c.bc, {});
+  for (const double mm : {1e-2, 1e-4}) {
+    FemStaticOptions o;
+    o.tolerance_mm = mm;
+    const auto loose = solve_fem_static(c.model, c.bc, {}, o);
+    ASSERT_TRUE(loose.report.converged);
+    EXPECT_LE(loose.report.newton_iterations, tight.report.newton_iterations);
+    // The last full step moved nothing by more than the budget, and Newton converges fast from there:
+    // the answer is within the budget of the tight one.
+    EXPECT_LT(largest_difference(loose.displacements, tight.displacements), mm) << mm;
+  }
+  FemStaticOptions bad;
+  bad.tolerance_mm = -1;
+  EXPECT_THROW(solve_fem_static(c.model, c.bc, {}, bad), InputError);
+}
+
+// Neo-Hookean at nu = 0.45 stretched by half: lambda ln J > mu in the stretched elements, whose exact
+// tangents are indefinite; projected where needed or always, Newton reaches the same equilibrium.
+TEST(FemStaticSolver, IndefiniteTangentsAreProjectedAndNewtonStillConverges) {
+  const GrabbedCube pull = grabbed_cube(FemMaterialModel::neo_hookean, 5.0);
+  FemStaticOptions when_needed, always;
+  always.projection = FemTangentProjection::always;
+  when_needed.linear_solve = always.linear_solve = FemLinearSolve::direct;
+  when_needed.load_steps = always.load_steps = 4;
+  const auto a = solve_fem_static(pull.model, pull.bc, {}, when_needed);
+  const auto b = solve_fem_static(pull.model, pull.bc, {}, always);
+  ASSERT_TRUE(a.report.converged);
+  ASSERT_TRUE(b.report.converged);
+  EXPECT_LT(largest_difference(a.displacements, b.displacements), 1e-6);
+  // Projecting every element costs Newton its quadratic convergence where the exact tangent was fine.
+  EXPECT_LE(a.report.newton_iterations, b.report.newton_iterations);
+}
+
+TEST(FemStaticSolver, AKeptSolverReusesItsFactorAcrossSolves) {
+  GrabbedCube c = grabbed_cube(FemMaterialModel::neo_hookean, -0.5);
+  FemStaticOptions o;
+  o.linear_solve = FemLinearSolve::direct;
+  FemStaticSolver solver(c.model, o);
+  std::vector<double> u;
+  int later_factorizations = 0;
+  for (int frame = 1; frame <= 4; ++frame) {  // a quasi-static sequence: the grab pushes further each frame
+    for (std::size_t k = 2; k < c.bc.prescribed_displacements.size(); k += 3) c.bc.prescribed_displacements[k] = -0.5 * frame;
+    const auto r = solver.solve(c.bc, {}, frame > 1 ? &u : nullptr);
+    ASSERT_TRUE(r.report.converged);
+    if (frame > 1) later_factorizations += r.report.factorizations;
+    const auto fresh = solve_fem_static(c.model, c.bc, {}, o);
+    EXPECT_LT(largest_difference(r.displacements, fresh.displacements), 1e-6) << frame;
+    u = r.displacements;
+  }
+  // The first solve factorised; later ones mostly precondition CG with a kept factor.
+  EXPECT_LT(later_factorizations, 3 * 4);
+}
+
+TEST(FemStaticSolver, ASingularPartOfTheMeshIsNamedByItsNode) {
+  // Two boxes side by side that share no node; only the first is fixed: the second can move rigidly,
+  // which the whole mesh's rigid-mode check does not see, and its stiffness has no Cholesky factor.
+  const auto a = fem_box_mesh({2, 2, 2}, {2, 2, 2});
+  const auto b = fem_box_mesh({2, 2, 2}, {2, 2, 2}, {5, 0, 0});
+  std::vector<double> nodes = a.nodes;
+  nodes.insert(nodes.end(), b.nodes.begin(), b.nodes.end());
+  std::vector<int32_t> tets = a.tets;
+  const int32_t offset = static_cast<int32_t>(a.nodes.size() / 3);
+  for (const int32_t v : b.tets) tets.push_back(v + offset);
+  const FemModel m = build_fem_model(nodes, tets, material(FemMaterialModel::linear));
+  FemBoundaryConditions bc;
+  for (int32_t i = 0; i < offset; ++i)
+    if (m.nodes[3 * i + 2] == 0) bc.fixed_nodes.push_back(i);
+  FemLoads loads;
+  loads.gravity = {0, 0, -9810};
+  FemStaticOptions o;
+  o.linear_solve = FemLinearSolve::direct;
+  try {
+    (void)solve_fem_static(m, bc, loads, o);
+    ADD_FAILURE() << "a floating part was solved";
+  } catch (const RuntimeError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("not positive definite at node "), std::string::npos) << what;
+  }
 }
 
 }  // namespace

@@ -193,6 +193,61 @@ TEST(Scenario, FemKindsAndTheirRules) {
             std::string::npos);
 }
 
+TEST(Scenario, SolverSectionAxesAndTheNewFemModels) {
+  const std::string base =
+      "ctsurg_scenario: 1\nmodel:\n  kind: fem\n  tetmesh: t.h5\n  material_law: corotational\n  solver: implicit\n"
+      "material: {preset: kidney, stiffness_damping_s: 0.01}\ntime: {duration_s: 1}\noutput: {trajectory: o.h5}\n"
+      "fixed:\n  - {box_fraction: {min: [0, 0, 0], max: [1, 1, 0.1]}, axes: [z, x]}\n"
+      "solver: {linear: direct, tolerance_mm: 0.05, max_newton_iterations: 7, max_cg_iterations: 300}\n";
+  const auto s = parse_scenario(base, "f.yaml", "/b");
+  EXPECT_EQ(s.material_law, ctsurg::sim::FemMaterialModel::corotational);
+  EXPECT_EQ(s.fem_solver, ctsurg::sim::FemSolver::implicit);
+  EXPECT_DOUBLE_EQ(s.stiffness_damping_s, 0.01);
+  ASSERT_EQ(s.fixed.size(), 1u);
+  EXPECT_EQ(s.fixed[0].axes, 5);  // x and z
+  EXPECT_EQ(s.solver.linear, ctsurg::sim::FemLinearSolve::direct);
+  EXPECT_DOUBLE_EQ(s.solver.tolerance_mm, 0.05);
+  EXPECT_EQ(s.solver.max_newton_iterations, 7);
+  EXPECT_EQ(s.solver.max_cg_iterations, 300);
+  EXPECT_NE(ctsurg::sim::describe_scenario(s).find("\"solver\": \"implicit\""), std::string::npos);
+  const auto error = [&](const std::string& text) {
+    try {
+      (void)parse_scenario(text, "f.yaml", "/b");
+    } catch (const ctsurg::InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("(accepted)");
+  };
+  const auto expect_error = [&](const std::string& text, const std::string& part) {
+    const std::string e = error(text);
+    EXPECT_NE(e.find(part), std::string::npos) << e;
+  };
+  expect_error(replaced(base, "axes: [z, x]", "axes: [z, w]"), "f.yaml: fixed[0].axes[1]");
+  expect_error(replaced(base, "axes: [z, x]", "axes: [z, z]"), "'z' is named twice");
+  expect_error(replaced(base, "axes: [z, x]", "axes: []"), "name at least one of x, y, z");
+  const std::string dynamic = replaced(replaced(base, "solver: implicit", "solver: dynamic"), ", stiffness_damping_s: 0.01", "");
+  expect_error(dynamic, "fixed[0].axes: fixing some axes only needs solver: static or implicit");
+  expect_error(replaced(base, "tolerance_mm: 0.05", "tolerance_mm: 20"), "solver.tolerance_mm: must be <= 10 mm");
+  expect_error(replaced(base, "tolerance_mm: 0.05", "tolerance_mm: -1"), "solver.tolerance_mm");
+  expect_error(replaced(base, "linear: direct", "linear: magic"), "solver.linear");
+  expect_error(replaced(base, "max_newton_iterations: 7", "max_newton_iterations: 0"), "solver.max_newton_iterations");
+  expect_error(replaced(base, "max_cg_iterations: 300", "restarts: 3"), "solver.restarts");
+  expect_error(replaced(base, "solver: implicit", "solver: static"), "material.stiffness_damping_s: only for kind: fem with solver: implicit");
+  expect_error(replaced(dynamic, ", axes: [z, x]", ""),
+               "solver: only for kind: fem with solver: static or implicit");
+  expect_error(replaced(base, "material_law: corotational", "material_law: hookean"), "model.material_law");
+  EXPECT_EQ(parse_scenario(replaced(base, "solver: implicit", "solver: implicit\n  elements: quadratic"), "f.yaml", "/b").fem_order, 2);
+  expect_error(replaced(dynamic, "solver: dynamic", "solver: dynamic\n  elements: quadratic"), "model.elements: quadratic tets need solver: static or implicit");
+  expect_error(replaced(base, "solver: implicit", "solver: implicit\n  elements: cubic"), "model.elements");
+  expect_error(base + "tools:\n  - probe: {radius_mm: 2, path: [{t: 0, position_mm: [0, 0, 0]}]}\n", "probe needs solver: dynamic");
+  // A spring model holds axes too (its particles' components); the solver section is FEM's only.
+  const std::string springs =
+      "ctsurg_scenario: 1\nmodel: {kind: spring_grid, grid: g.h5}\nmaterial: {preset: kidney}\ntime: {duration_s: 1}\n"
+      "output: {trajectory: o.h5}\nfixed:\n  - {label: 1, axes: [y]}\n";
+  EXPECT_EQ(parse_scenario(springs, "f.yaml", "/b").fixed[0].axes, 2);
+  expect_error(springs + "solver: {tolerance_mm: 0.1}\n", "solver: only for kind: fem");
+}
+
 TEST(Scenario, RenderRequestsAreChecked) {
   const std::string base = std::string(kFull) + "render:\n  - {name: a, layout: heat-map, frames: \"10\", size: 256}\n";
   const auto s = parse_scenario(base, "s.yaml", "/base");

@@ -265,6 +265,107 @@ TEST(ScenarioRun, FemStaticAndDynamicAgreeAndTheGrabIsPrescribed) {
   EXPECT_LT(worst, 0.05);
 }
 
+namespace {
+
+std::string with(std::string text, const std::string& from, const std::string& to) {
+  const size_t at = text.find(from);
+  EXPECT_NE(at, std::string::npos) << from;
+  return text.replace(at, from.size(), to);
+}
+
+double worst_difference(const Trajectory& a, const Trajectory& b) {
+  const float* la = a.frame_vertices(a.frame_count() - 1);
+  const float* lb = b.frame_vertices(b.frame_count() - 1);
+  double worst = 0;
+  for (int64_t i = 0; i < 3 * a.vertex_count(); ++i) worst = std::max(worst, std::abs(double(la[i]) - lb[i]));
+  return worst;
+}
+
+}  // namespace
+
+TEST(ScenarioRun, FemImplicitSettlesToTheStaticShapeAndCorotationalStaysCloseToNeoHookean) {
+  TempDir dir;
+  write_bar(dir.path());
+  write_bar_tets(dir.path());
+  const std::string time = "time:\n  duration_s: 0.5\n";
+  RunReport str;
+  const Trajectory st = run_scenario(parse_scenario(fem_scenario("neo_hookean", "static", time), dir.path() / "s.yaml", dir.path()), &str);
+  RunReport ir;
+  const auto implicit = parse_scenario(with(fem_scenario("neo_hookean", "implicit", time), "damping_per_s: 200", "damping_per_s: 5"),
+                                       dir.path() / "s.yaml", dir.path());
+  const Trajectory im = run_scenario(implicit, &ir);
+  EXPECT_EQ(im.model, "fem neo_hookean (implicit)");
+  EXPECT_EQ(ir.steps, 30);  // frames of 1/60 s (dt_s: auto)
+  EXPECT_NEAR(im.dt_s, 1.0 / 60, 1e-15);
+  EXPECT_LT(worst_difference(st, im), 1e-3);
+  EXPECT_GT(im.metric("newton_iterations")->values.back(), 0);
+  // Corotational linear FEM: the same 3 mm grab (small strains) within a tenth of a millimetre of
+  // Neo-Hookean, but not identical.
+  const Trajectory co = run_scenario(parse_scenario(fem_scenario("corotational", "static", time), dir.path() / "s.yaml", dir.path()));
+  EXPECT_EQ(co.model, "fem corotational (static)");
+  const double d = worst_difference(st, co);
+  EXPECT_GT(d, 1e-5);
+  EXPECT_LT(d, 0.1);
+  // Quadratic tets (elements: quadratic): the same grab, the surface following the 10-node tets; the
+  // bar bends more freely than with locking linear tets, but not far off.
+  RunReport qr;
+  const Trajectory quad = run_scenario(
+      parse_scenario(with(fem_scenario("neo_hookean", "static", time), "material_law: neo_hookean", "material_law: neo_hookean\n  elements: quadratic"),
+                     dir.path() / "s.yaml", dir.path()),
+      &qr);
+  EXPECT_EQ(quad.model, "fem neo_hookean quadratic (static)");
+  EXPECT_GT(qr.particles, 2 * str.particles);  // the edge nodes
+  const double dq = worst_difference(st, quad);
+  std::printf("quadratic vs linear tets, 3 mm grab: %.3f mm apart on the surface\n", dq);
+  EXPECT_GT(dq, 1e-3);
+  EXPECT_LT(dq, 1.0);
+  EXPECT_GE(quad.metric("max_displacement")->values.back(), 3.0 - 1e-9);
+  // The solver section: a 0.5 mm budget stops earlier and stays within it.
+  const Trajectory loose = run_scenario(
+      parse_scenario(fem_scenario("neo_hookean", "static", time) + "solver: {linear: iterative, tolerance_mm: 0.5}\n", dir.path() / "s.yaml",
+                     dir.path()));
+  EXPECT_LT(worst_difference(st, loose), 0.5);
+}
+
+TEST(ScenarioRun, FixingSomeAxesHoldsOnlyThoseComponents) {
+  TempDir dir;
+  write_bar(dir.path());
+  write_bar_tets(dir.path());
+  // The root end held in x only (a roller): the grab lifts the whole bar, the root slides up but not along x.
+  const std::string time = "time:\n  duration_s: 0.1\n";
+  const std::string root = "box: {min: [10, -20, 30], max: [11.5, 0, 40]}";
+  const Trajectory roller = run_scenario(parse_scenario(with(fem_scenario("linear", "static", time), root, "{" + root + ", axes: [x]}"),
+                                                        dir.path() / "s.yaml", dir.path()));
+  const float* last = roller.frame_vertices(roller.frame_count() - 1);
+  double lift = 0;
+  for (int64_t v = 0; v < roller.vertex_count(); ++v) {
+    if (roller.rest_vertices[static_cast<size_t>(3 * v)] >= 11.5) continue;
+    lift = std::max(lift, double(last[3 * v + 2]) - roller.rest_vertices[static_cast<size_t>(3 * v + 2)]);
+  }
+  std::printf("FEM root on a roller: lifted %.3f mm by the 3 mm grab\n", lift);
+  EXPECT_GT(lift, 1.0);
+  // The spring grid: the root held in x only slides sideways with an 8 mm pull in -y.
+  const std::string tools =
+      "tools:\n  - grab:\n      radius_mm: 2.5\n      path:\n        - {t: 0.0, position_mm: [42, -12, 38]}\n"
+      "        - {t: 0.1, offset_mm: [0, -8, 0]}\n";
+  const std::string fix = "box_fraction: {min: [0, 0, 0], max: [0.01, 1, 1]}";
+  RunReport sr;
+  const Trajectory springs = run_scenario(
+      parse_scenario(with(bar_scenario(tools, "time:\n  duration_s: 0.2\n"), fix, "{" + fix + ", axes: [x]}"), dir.path() / "s.yaml", dir.path()),
+      &sr);
+  EXPECT_EQ(sr.fixed, 16);
+  const float* end = springs.frame_vertices(springs.frame_count() - 1);
+  double slide = 0, along = 0;
+  for (int64_t v = 0; v < springs.vertex_count(); ++v) {
+    if (springs.rest_vertices[static_cast<size_t>(3 * v)] >= 12.5) continue;
+    slide = std::min(slide, double(end[3 * v + 1]) - springs.rest_vertices[static_cast<size_t>(3 * v + 1)]);
+    along = std::max(along, std::abs(double(end[3 * v]) - springs.rest_vertices[static_cast<size_t>(3 * v)]));
+  }
+  std::printf("spring root on a roller: slid %.3f mm sideways, %.4f mm along x\n", slide, along);
+  EXPECT_LT(slide, -1.0);  // fully fixed it stays within 0.05 mm (GrabPullsTheFreeEndAndTheFixedEndStays)
+  EXPECT_LT(along, 0.05);  // the surface near the held particles follows them: no slide along x
+}
+
 // The loop itself, over an engine without physics (support/fake_engine.h).
 namespace {
 

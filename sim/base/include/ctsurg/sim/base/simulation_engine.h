@@ -62,6 +62,7 @@ struct EngineOptions {
   double dt = 0;                           // s, a dynamic engine's step; 0 = safety_factor x the critical step
   double safety_factor = 0.5;              // (0, 1]
   double mass_damping = 0;                 // mass-proportional (Rayleigh) damping rate, 1/s (>= 0)
+  double stiffness_damping = 0;            // stiffness-proportional (Rayleigh) damping, s (>= 0; implicit FEM)
   std::array<double, 3> gravity{0, 0, 0};  // mm/s^2, LPS
   int threads = 0;                         // CPU threads, 0 = automatic
   std::string where = "engine";            // names the run in messages (a scenario file)

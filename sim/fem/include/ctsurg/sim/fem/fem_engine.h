@@ -8,15 +8,24 @@
 //            returns unstable, with the state before the failing step, when it fires.
 //   static   a quasi-static sequence: each frame the equilibrium under that frame's grabs, forces and
 //            gravity; the linear material by the factorised, condensed solver (fem_linear_static_solver.h:
-//            one factorisation for the run), the nonlinear laws by Newton with conjugate gradients
-//            (fem_static_solver.h), warm-started from the previous frame.
+//            one factorisation for the run, where the supports alone hold the model), the other laws
+//            (and the linear one where a grab completes the supports) by Newton (fem_static_solver.h:
+//            direct solves, the factor kept across frames), warm-started from the previous frame.
+//   implicit backward Euler (fem_implicit_dynamics.h): Newton per step on the factorised tangent, steps
+//            of a frame (dt default 1/60 s) whatever the tissue's stiffness; grabs and forces as the
+//            explicit dynamics'.
 //
-// Backend::cuda runs the explicit dynamics and the static solver's conjugate gradients on the device;
-// the linear solver's factorisation stays on the CPU. Probes need the dynamic solver (contact is not
-// part of the static one); the FEM models do not cut. Restarts with a halved step are not offered.
+// Backend::cuda runs the explicit dynamics and the iterative solves' conjugate gradients on the device;
+// the factorisations stay on the CPU. Probes need the explicit dynamics (contact is part of no other
+// solver); the FEM models do not cut. Restarts with a halved step are not offered (the implicit dynamics
+// halves a failing step itself).
 //
 // Metrics beyond the engine's common ones: newton_iterations and cg_iterations of the last static
-// solve (0 for the dynamic solver).
+// solve, or the implicit dynamics' Newton iterations of all steps so far (cumulative: differences
+// between frames are per frame); 0 for the explicit dynamics.
+//
+// Quadratic (10-node) tets run static and implicit; the surface follows them with the quadratic shape
+// functions at each vertex's barycentric coordinates in its tet.
 //
 // Units: mm (local frame: LPS minus origin), s, g; forces uN, energies nJ.
 #pragma once
@@ -25,6 +34,7 @@
 #include "ctsurg/sim/base/particle_state.h"
 #include "ctsurg/sim/base/simulation_engine.h"
 #include "ctsurg/sim/fem/fem_explicit_dynamics.h"
+#include "ctsurg/sim/fem/fem_implicit_dynamics.h"
 #include "ctsurg/sim/fem/fem_linear_static_solver.h"
 #include "ctsurg/sim/fem/fem_model.h"
 #include "ctsurg/sim/fem/fem_static_solver.h"
@@ -39,20 +49,26 @@
 
 namespace ctsurg::sim {
 
-enum class FemSolver { dynamic, static_equilibrium };  // explicit dynamics, or static Newton per frame
+// Explicit dynamics, static Newton per frame, or implicit (backward Euler) dynamics.
+enum class FemSolver { dynamic, static_equilibrium, implicit };
 
 // EngineOptions' dt, safety_factor and mass_damping are the dynamic solver's (FemDynamicsOptions).
 struct FemEngineOptions : EngineOptions {
   FemSolver solver = FemSolver::dynamic;
+  // The static solver's Newton solves (fem_static_solver.h: the linear solve, tolerances, limits);
+  // threads and initial_displacements are the engine's.
+  FemStaticOptions newton;
 };
 
 class FemEngine final : public SimulationEngine {
  public:
-  // model (local frame, origin `origin` LPS mm), the nodes held fixed, the surface it carries (may be
-  // empty; its coupling names nodes). Throws InputError("fem engine", "fixed", ...) for a static solver
-  // without fixed nodes (the stiffness is singular), and as FemExplicitDynamics and
+  // model (local frame, origin `origin` LPS mm); supports: the nodes held fixed and single fixed
+  // components (rollers, symmetry planes: the static and implicit solvers only; its prescribed_* are not
+  // used); the surface it carries (may be empty; its coupling names nodes). Throws
+  // InputError(options.where, "fixed", ...) for a static solver without supports (the stiffness is
+  // singular) or fixed components on the explicit dynamics, and as FemExplicitDynamics and
   // FemLinearStaticSolver for options or a backend they refuse.
-  FemEngine(FemModel model, std::vector<int32_t> fixed_nodes, EmbeddedSurface surface, const Vec3& origin,
+  FemEngine(FemModel model, FemBoundaryConditions supports, EmbeddedSurface surface, const Vec3& origin,
             const FemEngineOptions& options, Backend backend = Backend::cpu);
   ~FemEngine() override;
   // Not copied or moved: the state lives where its solvers point.
@@ -92,9 +108,10 @@ class FemEngine final : public SimulationEngine {
 
  private:
   void check_tools(const std::vector<ToolInput>& tools) const;
+  StabilityReport step_implicit(const std::vector<ToolInput>& tools, int steps);
 
   FemModel model_;
-  std::vector<int32_t> fixed_nodes_;
+  FemBoundaryConditions supports_;
   EmbeddedSurface surface_;
   Vec3 origin_;
   FemEngineOptions options_;
@@ -104,13 +121,18 @@ class FemEngine final : public SimulationEngine {
   std::vector<double> u_;           // #N x 3 mm
   std::vector<Real> rest_real_;     // #N x 3 mm, the rest positions as the surface kernel reads them
   ParticleState positions_;         // rest + u, for the surface
-  // dynamic
+  // Quadratic tets: each surface vertex follows its tet's 10 nodes with the quadratic shape functions
+  // at its barycentric coordinates (the surface's coupling gives the tet's corners and those).
+  std::vector<int32_t> quadratic_nodes_;   // #V x 10
+  std::vector<double> quadratic_weights_;  // #V x 10
+  // dynamic: explicit or implicit
   std::optional<FemExplicitDynamics> dynamics_;
+  std::unique_ptr<FemImplicitDynamics> implicit_;
   bool had_grab_ = false;
   // static
   std::unique_ptr<FemLinearStaticSolver> linear_;
+  std::unique_ptr<FemStaticSolver> static_solver_;
   FemBoundaryConditions bc_;
-  FemStaticOptions static_options_;
   double static_time_ = 0;
   int solves_ = 0, newton_ = 0, cg_ = 0;
   int64_t steps_ = 0;

@@ -4,11 +4,12 @@
 // factor. This is the condensation that the FEM paper (Huang et al., section 5) names as its next step
 // (after Bro-Nielsen and Cotin, 1996), done exactly rather than by reducing the mesh:
 //
-//   K_ss = L D L^T          K restricted to the free components s (all components of used nodes that
-//                           no support holds); Eigen::SimplicialLDLT, AMD ordering, at construction.
+//   K_ss = L L^T            K restricted to the free components s (all components of used nodes that
+//                           no support holds); CHOLMOD's supernodal Cholesky (src/sparse_cholesky.h), at
+//                           construction.
 //   c_j = K_ss^-1 e_j       the response to a unit force on component j ("columns"), computed the first
-//                           time a node is grabbed or loaded (one back-substitution per component,
-//                           in parallel) and kept for later solves.
+//                           time a node is grabbed or loaded (the new columns in one solve with many
+//                           right-hand sides) and kept for later solves.
 //
 // A solve with grabbed (prescribed) components p held at d and nodal forces f:
 //   u_0 = K_ss^-1 f         from the columns of the loaded nodes (or one back-substitution when more

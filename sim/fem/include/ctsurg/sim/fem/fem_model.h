@@ -1,18 +1,25 @@
-// The tetrahedral finite element model (linear 4-node tets, total Lagrangian): the rest mesh, one
-// material, and what every solver precomputes once per element and node (Huang et al., the FEM
-// paper, section 3: linear interpolation in each tet).
+// The tetrahedral finite element model (total Lagrangian): the rest mesh, one material, and what every
+// solver precomputes once per element and node (Huang et al., the FEM paper, section 3: linear
+// interpolation in each tet), for linear (4-node) or quadratic (10-node) tets.
 //
-//   per element: rest volume V = det(Dm) / 6 and B = Dm^-1, Dm = [X1-X0, X2-X0, X3-X0] (columns), whose
-//                rows are the shape-function gradients of corners 1..3 (fem_element_impl.h)
-//   per node:    lumped mass m_i = sum over the tets at i of rho V / 4 (the paper's diagonal mass
-//                matrix, section 3.3), and the CSR list of (element, corner) at the node, sorted by
-//                element: every per-node sum is a gather over it, deterministic, no atomics
+//   per element: rest volume V = det(Dm) / 6 and B = Dm^-1, Dm = [X1-X0, X2-X0, X3-X0] (columns) of its
+//                corners, whose rows are the corners' barycentric gradients (fem_element_impl.h; the
+//                quadratic tet's edges are straight, so B and V are its corners' too:
+//                fem_quadratic_element_impl.h)
+//   per node:    lumped mass (linear: m_i = sum over the tets at i of rho V / 4, the paper's diagonal
+//                mass matrix, section 3.3; quadratic: the HRZ diagonal scaling of the consistent mass,
+//                rho V / 36 per corner and 4 rho V / 27 per edge node, positive where row sums are not),
+//                the consistent load of a unit body acceleration (integral of rho N_i: the static
+//                solver's gravity; linear: the mass; quadratic: -rho V / 20 per corner, rho V / 5 per edge
+//                node), and the CSR list of (element, node slot) at the node, sorted by element: every
+//                per-node sum is a gather over it, deterministic, no atomics
 //
-// Units: nodes LPS mm, volumes mm^3, B 1/mm, masses g.
+// Units: nodes mm, volumes mm^3, B 1/mm, masses g.
 #pragma once
 
 #include "ctsurg/sim/fem/fem_material.h"
 
+#include <array>
 #include <cstdint>
 #include <vector>
 
@@ -25,17 +32,24 @@ namespace ctsurg::sim {
 struct FemModel {
   FemMaterial material;
   LameParameters lame;
-  std::vector<double> nodes;         // #N x 3 rest positions, LPS mm, row-major
-  std::vector<int32_t> tets;         // #T x 4 node ids, positively oriented
+  std::vector<double> nodes;         // #N x 3 rest positions, mm (LPS minus frame_origin), row-major
+  int32_t order = 1;                 // 1: linear tets (4 nodes), 2: quadratic (10 nodes; fem_quadratic_element_impl.h)
+  std::vector<int32_t> tets;         // #T x nodes_per_element() node ids, corners positively oriented
   std::vector<double> rest_volume;   // #T mm^3 (> 0)
   std::vector<double> dm_inverse;    // #T x 9, Dm^-1 row-major, 1/mm
-  std::vector<double> node_mass;     // #N g; 0 for a node that no tet uses
+  std::vector<double> node_mass;     // #N g, lumped; 0 for a node that no tet uses
+  std::vector<double> node_load;     // #N g: the consistent load of a unit acceleration (see above)
+  int32_t vertex_count = 0;          // the linear mesh's nodes (ids below it); a quadratic model's edge nodes follow
   std::vector<int32_t> node_offsets; // #N + 1, CSR row starts into node_corners
-  std::vector<int32_t> node_corners; // #T x 4 entries 4 e + corner (corner 0..3), each row sorted
+  std::vector<int32_t> node_corners; // #T x npe entries npe e + slot (npe = nodes_per_element()), each row sorted
   int32_t unused_nodes = 0;          // nodes no tet uses (held fixed by every solver)
+  // Where the nodes' frame sits in LPS mm: a scenario runs in a local frame near its model (LPS minus
+  // this), and messages that name a point add it back. {0, 0, 0} when nodes are LPS.
+  std::array<double, 3> frame_origin{0, 0, 0};
 
   int32_t node_count() const { return static_cast<int32_t>(nodes.size() / 3); }
-  int32_t tet_count() const { return static_cast<int32_t>(tets.size() / 4); }
+  int32_t nodes_per_element() const { return order == 2 ? 10 : 4; }
+  int32_t tet_count() const { return static_cast<int32_t>(tets.size() / static_cast<std::size_t>(nodes_per_element())); }
 };
 
 // Builds the model from nodes (#N x 3, LPS mm) and tets (#T x 4, node ids). Throws
@@ -46,6 +60,18 @@ struct FemModel {
 FemModel build_fem_model(const std::vector<double>& nodes, const std::vector<int32_t>& tets, const FemMaterial& material);
 // The same from a ctsurg tet mesh (mesh.nodes, mesh.tets; labels are not used: one material).
 FemModel build_fem_model(const TetMesh& mesh, const FemMaterial& material);
+// The quadratic model of the same linear tets: their nodes first (ids kept), then one node at the middle
+// of every edge, numbered in the order the edges are first met (tet by tet, edges in slot order 4..9):
+// deterministic. Same errors as build_fem_model.
+FemModel build_quadratic_fem_model(const std::vector<double>& nodes, const std::vector<int32_t>& tets, const FemMaterial& material);
+FemModel build_quadratic_fem_model(const TetMesh& mesh, const FemMaterial& material);
+// The edge node of a quadratic model between vertices i and j (either order), or -1.
+int32_t fem_edge_node(const FemModel& model, int32_t i, int32_t j);
+
+// A point of the nodes' frame (mm) in LPS mm, for messages: p + model.frame_origin.
+inline std::array<double, 3> fem_lps_point(const FemModel& model, const double* p) {
+  return {p[0] + model.frame_origin[0], p[1] + model.frame_origin[1], p[2] + model.frame_origin[2]};
+}
 
 // Total rest volume, mm^3, and total mass, g.
 double fem_total_volume(const FemModel& model);

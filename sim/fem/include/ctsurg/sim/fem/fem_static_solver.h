@@ -4,10 +4,17 @@
 // backtracking line search.
 //
 // Each Newton iteration assembles the tangent stiffness K = -d f_int / du (element 12 x 12 Hessians,
-// fem_element_impl.h) over the free components into an Eigen::SparseMatrix<double> (the sparsity
-// pattern is built once; values are gathered per non-zero from the element matrices, deterministic)
-// and solves K du = r, r = f_int + f_ext on the free components, by preconditioned conjugate
-// gradients in double (the paper's section 4; Eigen::ConjugateGradient, full matrix, OpenMP products).
+// fem_element_impl.h; for St. Venant-Kirchhoff and Neo-Hookean projected to positive semi-definite per
+// element where the exact tangent has no Cholesky factor: see `projection`) over the free components into a sparse
+// matrix (the sparsity pattern is built once per held set; values are gathered per non-zero from the
+// element matrices, deterministic) and solves K du = r, r = f_int + f_ext on the free components:
+//   direct      CHOLMOD's supernodal Cholesky (src/sparse_cholesky.h): analysed once per held set,
+//               the factor kept across Newton iterations and solves; while the tangent has moved since,
+//               the old factor preconditions conjugate gradients on the new tangent, and the tangent is
+//               factorised again only when those need more than reuse_cg_iterations;
+//   iterative   Jacobi-preconditioned conjugate gradients in double (the paper's section 4;
+//               Eigen::ConjugateGradient, full matrix, OpenMP products; on the device with cuda);
+//   automatic   direct while its factor fits in direct_max_bytes (iterative on the cuda backend).
 // Then u <- u + alpha du with alpha = 1, 1/2, 1/4, ... until ||r|| decreases (a trial that inverts an
 // element counts as an increase). Held components are not moved ahead of the free ones: while they
 // lag their targets (each load increment raises them), the iteration is a lifted predictor,
@@ -16,7 +23,9 @@
 //
 // Convergence of a load step: ||r||_2 <= residual_tolerance * r_ref, r_ref = ||r|| at u = 0 under the
 // full load (the full forces and prescribed displacements), and ||alpha du||_inf <=
-// displacement_tolerance * D, D = the diagonal of the rest mesh's bounding box. The linear material
+// displacement_tolerance * D, D = the diagonal of the rest mesh's bounding box. Or, with
+// tolerance_mm > 0, in millimetres: a full step (alpha = 1) moved no free component by more than
+// tolerance_mm, and the residual's displacement, ||r||_inf / mean(diag K), is below tolerance_mm too. The linear material
 // takes exactly one Newton step (K is exact; the accuracy is the CG tolerance's, report.relative_residual
 // says what it reached). A step that does not converge within
 // max_newton_iterations, or whose line search fails, is retried from the last converged state with
@@ -30,6 +39,7 @@
 
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 namespace ctsurg::sim {
@@ -47,6 +57,12 @@ struct FemLoads {
 };
 
 enum class FemPreconditioner { diagonal, incomplete_cholesky };
+enum class FemLinearSolve { automatic, direct, iterative };  // see above
+// The projection of St. Venant-Kirchhoff and Neo-Hookean element tangents to positive semi-definite
+// (src/fem_tangent_projection.h): never; when needed (direct solves: a Newton iteration whose exact
+// tangent has no Cholesky factor is assembled again projected, so Newton keeps its quadratic
+// convergence wherever the exact tangent is positive definite); always.
+enum class FemTangentProjection { never, when_needed, always };
 
 struct FemStaticOptions {
   double residual_tolerance = 1e-8;      // relative to r_ref (see above)
@@ -66,6 +82,11 @@ struct FemStaticOptions {
   // sequence), or empty: the rest state. A warm start tries the full load at once; if that fails it
   // falls back to load stepping from rest (report.warm_start_failed).
   std::vector<double> initial_displacements;
+  FemLinearSolve linear_solve = FemLinearSolve::automatic;
+  double tolerance_mm = 0;               // > 0: the stopping rule in millimetres (see above)
+  FemTangentProjection projection = FemTangentProjection::when_needed;
+  int64_t direct_max_bytes = 0;          // automatic: the direct solve while its factor fits (0: half the memory available)
+  int reuse_cg_iterations = 12;          // direct: CG iterations on an old factor before refactorising
 };
 
 struct FemStaticReport {
@@ -83,6 +104,9 @@ struct FemStaticReport {
   double solve_seconds = 0;               // preconditioner + CG
   int free_components = 0;                // unknowns of the linear systems
   bool warm_start_failed = false;         // options.initial_displacements given, but Newton fell back to rest
+  bool direct = false;                    // the linear solves were direct (CHOLMOD)
+  int factorizations = 0;                 // numeric factorisations in this solve
+  int64_t factor_bytes = 0;               // the factor's size (direct)
 };
 
 struct FemStaticResult {
@@ -104,5 +128,30 @@ struct FemStaticResult {
 // names the load factor and, if the cause was one, the inverted element).
 FemStaticResult solve_fem_static(const FemModel& model, const FemBoundaryConditions& bc, const FemLoads& loads,
                                  const FemStaticOptions& options = {}, Backend backend = Backend::cpu);
+
+class FemNewton;
+class DeviceConjugateGradient;
+
+// The same solve, many times on one model (a quasi-static sequence: a frame after another): the
+// sparsity pattern and the factor's analysis are kept while the held set stays the same, and the last
+// factor is kept for the next solve (as the conjugate gradients' preconditioner while the tangent
+// differs). Each solve warm-starts from `initial` (#N x 3 mm) when given. Arguments and errors as
+// solve_fem_static. The model must outlive the solver.
+class FemStaticSolver {
+ public:
+  FemStaticSolver(const FemModel& model, const FemStaticOptions& options = {}, Backend backend = Backend::cpu);
+  ~FemStaticSolver();
+  FemStaticSolver(const FemStaticSolver&) = delete;
+  FemStaticSolver& operator=(const FemStaticSolver&) = delete;
+
+  FemStaticResult solve(const FemBoundaryConditions& bc, const FemLoads& loads, const std::vector<double>* initial = nullptr);
+  const FemStaticOptions& options() const { return options_; }
+
+ private:
+  const FemModel& model_;
+  FemStaticOptions options_;
+  std::unique_ptr<DeviceConjugateGradient> device_cg_;
+  std::unique_ptr<FemNewton> newton_;
+};
 
 }  // namespace ctsurg::sim

@@ -12,6 +12,7 @@
 #include "ctsurg/sim/base/simulation_engine.h"
 #include "ctsurg/sim/fem/fem_engine.h"
 #include "ctsurg/sim/fem/fem_material.h"
+#include "ctsurg/sim/fem/fem_static_solver.h"
 #include "ctsurg/sim/surface/surface_coupling.h"
 
 #include <array>
@@ -72,6 +73,16 @@ struct FixedRegionSpec {
   Box box;              // box: LPS mm; box_fraction: fractions of the rest bounding box
   HalfSpace half_space;
   uint16_t label = 0;
+  uint8_t axes = 7;     // the components held: bit 0 x, 1 y, 2 z (rollers, symmetry planes); 7 = all
+};
+
+// The Newton solves of the FEM's static and implicit solvers (fem/fem_static_solver.h), from the
+// scenario's `solver:` section.
+struct SolverSpec {
+  FemLinearSolve linear = FemLinearSolve::automatic;  // auto | direct | iterative
+  double tolerance_mm = 0;         // the stopping rule in mm; 0 = the solvers' relative default
+  int max_newton_iterations = 25;  // per solve or step
+  int max_cg_iterations = 0;       // iterative: 0 = twice the unknowns
 };
 
 // Bounds of the time section (scenario.cpp): simulated time, the smallest step, output frames.
@@ -91,9 +102,11 @@ struct Scenario {
   CouplingMode coupling = CouplingMode::trilinear;
   FemMaterialModel material_law = FemMaterialModel::neo_hookean;  // kind: fem
   FemSolver fem_solver = FemSolver::dynamic;                       // kind: fem
+  int fem_order = 1;  // kind: fem; elements: linear (1, 4-node tets) | quadratic (2, 10-node; static and implicit)
   bool mass_from_fraction = false;
   Material material;                // preset, possibly with explicit overrides
   double damping_per_s = 0;         // mass-proportional damping rate alpha, 1/s (Verlet factor alpha dt)
+  double stiffness_damping_s = 0;   // fem implicit: Rayleigh stiffness damping beta, s
   std::array<double, 3> gravity{0, 0, 0};  // mm/s^2, LPS
   std::vector<FixedRegionSpec> fixed;
   std::vector<ToolAction> tools;
@@ -105,6 +118,7 @@ struct Scenario {
   bool write_particles = false;     // also store every particle's position per frame
   std::filesystem::path trajectory; // output trajectory (.h5)
   std::vector<RenderRequest> render;  // pictures for the pipeline to make (none: no rendering)
+  SolverSpec solver;                // fem static and implicit
   std::string backend = "cpu";      // cpu | cuda | auto
   int threads = 0;                  // 0 = automatic
 };

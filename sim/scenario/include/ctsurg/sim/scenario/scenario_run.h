@@ -39,6 +39,8 @@ struct RunReport {
   int64_t springs_cut = 0;
   int64_t surface_triangles_removed = 0;
   double wall_s = 0;         // seconds in the time loop
+  double setup_s = 0;        // seconds building the engine (files read, model, factorisations): run_scenario(Scenario) only
+  std::vector<double> frame_wall_s;  // per recorded frame: seconds in the loop up to it (frame 0: 0)
   std::vector<std::string> notes;  // what the run decided (grab captures, auto step, ...), for the log
 };
 

@@ -63,6 +63,10 @@ class SpringEngine final : public SimulationEngine {
   SpringEngine& operator=(const SpringEngine&) = delete;
 
   const SpringModel& model() const { return model_; }
+  // Holds single components (3 particle + axis: rollers, symmetry planes) at their rest value: after
+  // every step the coordinate and its previous value are set back to rest (no velocity along it), as
+  // the tools overwrite the integration. CPU only (InputError on a device).
+  void hold_components(std::vector<int32_t> components);
   const ParticleState& state() const { return state_; }  // the host's copy (current after sync())
 
   EngineCounts counts() const override { return counts_; }
@@ -128,6 +132,7 @@ class SpringEngine final : public SimulationEngine {
   std::unique_ptr<SpringStepper> stepper_;
   std::vector<Hold> holds_;
   std::vector<float> vertices_;  // scratch: the surface for a cut
+  std::vector<int32_t> held_components_;  // 3 particle + axis
   double time_ = 0;
   int64_t steps_ = 0, springs_cut_ = 0, triangles_removed_ = 0;
   bool tool_work_ = false;       // a tool acted since the last stability check

@@ -5,6 +5,7 @@
 #pragma once
 
 #include "ctsurg/sim/fem/kernels/fem_element_impl.h"
+#include "ctsurg/sim/fem/kernels/fem_quadratic_element_impl.h"
 
 namespace ctsurg::sim {
 
@@ -14,8 +15,9 @@ struct FemElementView {
   const T* dm_inverse;  // #T x 9
   const T* volume;      // #T mm^3
   int32_t count;        // #T
-  int32_t model;        // kFemLinear, kFemStvk, kFemNeoHookean
+  int32_t model;        // kFemLinear, kFemStvk, kFemNeoHookean, kFemCorotational
   T mu, lambda;         // Pa
+  int32_t order = 1;    // 1: tets #T x 4; 2: #T x 10 (quadratic; host only)
 };
 
 // Element e: its corner forces into corner_forces[12 e .. 12 e + 11]; false when inverted.
@@ -32,13 +34,26 @@ CTSURG_HD inline bool fem_element_force_pass(const FemElementView<T>& v, const T
   return fem_element_forces(v.model, v.mu, v.lambda, ue, v.dm_inverse + 9 * e, v.volume[e], corner_forces + 12 * e);
 }
 
+// Quadratic element e: its 10 nodes' forces into slot_forces[30 e .. 30 e + 29]; false when inverted.
+template <class T>
+CTSURG_HD inline bool fem_quadratic_element_force_pass(const FemElementView<T>& v, const T* u, int32_t e, T* slot_forces) {
+  T ue[30];
+  for (int a = 0; a < 10; ++a) {
+    const int32_t n = v.tets[10 * e + a];
+    ue[3 * a] = u[3 * n];
+    ue[3 * a + 1] = u[3 * n + 1];
+    ue[3 * a + 2] = u[3 * n + 2];
+  }
+  return fem_quadratic_element_forces(v.model, v.mu, v.lambda, ue, v.dm_inverse + 9 * e, v.volume[e], slot_forces + 30 * e);
+}
+
 // Node i: the sum of its corners' forces, in CSR order.
 template <class T>
 CTSURG_HD inline void fem_gather_node_force(const int32_t* offsets, const int32_t* corners, const T* corner_forces,
                                             int32_t i, T* f) {
   T fx = T(0), fy = T(0), fz = T(0);
   for (int32_t k = offsets[i]; k < offsets[i + 1]; ++k) {
-    const T* c = corner_forces + 3 * corners[k];  // 4 e + a -> 12 e + 3 a
+    const T* c = corner_forces + 3 * corners[k];  // npe e + a -> 3 npe e + 3 a
     fx += c[0];
     fy += c[1];
     fz += c[2];

@@ -1,0 +1,92 @@
+// Why CHOLMOD (issue 16): the FEM's tangent stiffness factorised by Eigen's own sparse Cholesky
+// (simplicial LLT and LDLT, AMD ordering) and by SuiteSparse's CHOLMOD (supernodal and simplicial,
+// its default ordering: AMD or METIS by trial, through Eigen's CholmodSupport), on the linear
+// material's stiffness of the Table 2 cubes (n = 9, 16, 24 cells a side: 1,000 .. 15,625 vertices,
+// the bottom face fixed). Each iteration is one numeric factorisation (the analysis is done once,
+// outside the loop, as FemNewton does per held set); counters: analysis ms, one solve (forward and
+// back substitution) ms, the factor's non-zeros where the solver reports them. CHOLMOD's BLAS is the
+// system's (OpenBLAS), one thread here.
+#include "ctsurg/sim/fem/fem_box_mesh.h"
+#include "ctsurg/sim/fem/fem_forces.h"
+#include "ctsurg/sim/fem/fem_model.h"
+
+#include "fem_bench_models.h"
+
+#include <Eigen/CholmodSupport>
+#include <Eigen/SparseCholesky>
+#include <benchmark/benchmark.h>
+
+#include <chrono>
+#include <map>
+#include <memory>
+#include <vector>
+
+namespace {
+
+using namespace ctsurg::sim;
+using SpMat = Eigen::SparseMatrix<double>;
+
+// K on the free components (z > 0) of the linear material's cube of n^3 cells, built once per n.
+const SpMat& stiffness(int n) {
+  static std::map<int, std::unique_ptr<SpMat>> cache;
+  auto& slot = cache[n];
+  if (slot) return *slot;
+  const FemModel& m = bench::cube(n, FemMaterialModel::linear);
+  std::vector<int> free(m.nodes.size(), -1);
+  int count = 0;
+  for (int32_t i = 0; i < m.node_count(); ++i)
+    for (int a = 0; a < 3; ++a)
+      if (m.nodes[3 * i + 2] > 1e-9) free[3 * i + a] = count++;
+  const std::vector<double> u(m.nodes.size(), 0.0);
+  std::vector<Eigen::Triplet<double>> t;
+  for (int32_t e = 0; e < m.tet_count(); ++e) {
+    const auto k = fem_element_stiffness(m, e, u);
+    for (int r = 0; r < 12; ++r)
+      for (int c = 0; c < 12; ++c) {
+        const int gr = free[3 * m.tets[4 * e + r / 3] + r % 3], gc = free[3 * m.tets[4 * e + c / 3] + c % 3];
+        if (gr >= 0 && gc >= 0) t.emplace_back(gr, gc, k[12 * r + c]);
+      }
+  }
+  slot = std::make_unique<SpMat>(count, count);
+  slot->setFromTriplets(t.begin(), t.end());
+  return *slot;
+}
+
+template <class Solver>
+void factorise(benchmark::State& state) {
+  const SpMat& K = stiffness(static_cast<int>(state.range(0)));
+  Solver solver;
+  const auto t0 = std::chrono::steady_clock::now();
+  solver.analyzePattern(K);
+  const double analyse = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  for (auto _ : state) {
+    solver.factorize(K);
+    if (solver.info() != Eigen::Success) state.SkipWithError("factorisation failed");
+  }
+  const Eigen::VectorXd b = Eigen::VectorXd::Ones(K.rows());
+  const auto t1 = std::chrono::steady_clock::now();
+  const Eigen::VectorXd x = solver.solve(b);
+  const double solve = std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
+  state.counters["unknowns"] = static_cast<double>(K.rows());
+  state.counters["analyse_ms"] = 1e3 * analyse;
+  state.counters["solve_ms"] = 1e3 * solve;
+  state.counters["rel_residual"] = (K * x - b).norm() / b.norm();
+}
+
+using EigenLLT = Eigen::SimplicialLLT<SpMat, Eigen::Lower, Eigen::AMDOrdering<int>>;
+using EigenLDLT = Eigen::SimplicialLDLT<SpMat, Eigen::Lower, Eigen::AMDOrdering<int>>;
+using CholmodSupernodal = Eigen::CholmodSupernodalLLT<SpMat, Eigen::Lower>;
+using CholmodSimplicial = Eigen::CholmodSimplicialLLT<SpMat, Eigen::Lower>;
+
+void BM_EigenSimplicialLLT(benchmark::State& s) { factorise<EigenLLT>(s); }
+void BM_EigenSimplicialLDLT(benchmark::State& s) { factorise<EigenLDLT>(s); }
+void BM_CholmodSupernodalLLT(benchmark::State& s) { factorise<CholmodSupernodal>(s); }
+void BM_CholmodSimplicialLLT(benchmark::State& s) { factorise<CholmodSimplicial>(s); }
+BENCHMARK(BM_EigenSimplicialLLT)->Arg(9)->Arg(16)->Arg(24)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_EigenSimplicialLDLT)->Arg(9)->Arg(16)->Arg(24)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_CholmodSupernodalLLT)->Arg(9)->Arg(16)->Arg(24)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_CholmodSimplicialLLT)->Arg(9)->Arg(16)->Arg(24)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+}  // namespace
+
+BENCHMARK_MAIN();

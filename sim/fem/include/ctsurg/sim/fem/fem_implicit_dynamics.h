@@ -1,0 +1,110 @@
+// Implicit (backward Euler) dynamics of a FemModel, for every material law: the path a live session
+// runs, steps of a frame (1/60 s) on stiff tissue, where the explicit dynamics' critical step is tens of
+// microseconds (fem_explicit_dynamics.h).
+//
+// With lumped masses M, Rayleigh damping D = alpha M + beta K_n (K_n the tangent at the step's start)
+// and v = (u_{n+1} - u_n) / h, each step solves
+//
+//   M (u - u_n - h v_n) / h^2 + D (u - u_n) / h = f_int(u) + f_ext          for u = u_{n+1}
+//
+// by Newton on the factorised tangent K(u) + (1/h^2 + alpha/h) M + (beta/h) K_n (src/fem_newton.h: the
+// static solver's machinery, with its direct solves, factor reuse and tangent projection), from the
+// predictor u_n + h v_n. Backward Euler is unconditionally stable for the linear law and damps: a mode of
+// angular frequency w loses a factor 1 / (1 + (w h)^2)^(1/2) of its amplitude per step even with no
+// Rayleigh damping (Hairer and Wanner, Solving ODEs II, section IV.2), so the high modes of a mesh are gone
+// in a step and the lowest ones decay too: energy is not conserved (docs/fem.md measures it).
+//
+// Tools: fixed nodes; prescribed displacements of a node set (a grab, at the step's end); external nodal
+// forces; gravity. No contact sphere (probes run on the explicit dynamics).
+//
+// Convergence of a step: options.newton's rule (tolerance_mm, default 1e-4 mm here: a step's inertia
+// term makes the static relative rule meaningless). A step whose Newton fails is retried as two half
+// steps (a grab moving in equal parts over them), down to max_halvings; then RuntimeError naming the
+// time and the cause, the state as it was before the step.
+//
+// Backends: cpu; cuda runs the linear solves' conjugate gradients on the device when the solve is
+// iterative (the direct factorisation stays on the CPU).
+//
+// Units: mm, g, s; forces uN, energies nJ, alpha 1/s, beta s, gravity mm/s^2.
+#pragma once
+
+#include "ctsurg/sim/base/backend.h"
+#include "ctsurg/sim/fem/fem_model.h"
+#include "ctsurg/sim/fem/fem_static_solver.h"
+
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+namespace ctsurg::sim {
+
+struct FemImplicitOptions {
+  double dt = 1.0 / 60;                   // s (> 0)
+  double mass_damping = 0;                // alpha, 1/s (>= 0)
+  double stiffness_damping = 0;           // beta, s (>= 0)
+  std::array<double, 3> gravity{0, 0, 0};  // mm/s^2
+  int max_halvings = 6;                   // a failed step is retried as 2, 4, ... sub-steps
+  int threads = 0;                        // 0 = one per 8,192 elements up to OpenMP's default
+  FemStaticOptions newton;                // the Newton solves (tolerance_mm 0 = 1e-4 mm)
+};
+
+struct FemImplicitStepReport {
+  int newton_iterations = 0;   // over the step's sub-steps
+  int factorizations = 0;
+  int substeps = 1;            // 2^halvings
+  double seconds = 0;
+};
+
+class FemNewton;
+class DeviceConjugateGradient;
+
+class FemImplicitDynamics {
+ public:
+  // Throws InputError("fem implicit", field, ...) for options out of range or a backend that cannot run
+  // here. The model must outlive this object. Starts at rest (u = 0, v = 0).
+  FemImplicitDynamics(const FemModel& model, const FemImplicitOptions& options = {}, Backend backend = Backend::cpu);
+  ~FemImplicitDynamics();
+  FemImplicitDynamics(const FemImplicitDynamics&) = delete;
+  FemImplicitDynamics& operator=(const FemImplicitDynamics&) = delete;
+
+  // Holds `nodes` at zero displacement, and the single components `components` (3 node + axis: rollers,
+  // symmetry planes). Replaces the previous supports.
+  void set_supports(const std::vector<int32_t>& nodes, const std::vector<int32_t>& components = {});
+  // Holds `nodes` at `displacements` (#G x 3 mm) at the end of the next steps (a grab). Replaces the
+  // previous grab.
+  void set_prescribed(const std::vector<int32_t>& nodes, const std::vector<double>& displacements);
+  void clear_prescribed();
+  // External nodal forces, #N x 3 uN (empty = none).
+  void set_external_forces(const std::vector<double>& forces);
+
+  // Advances `steps` steps of dt. Throws RuntimeError when a step fails after max_halvings halvings (the
+  // state stays as before that step).
+  FemImplicitStepReport step(int steps = 1);
+
+  double time() const { return time_; }
+  double dt() const { return options_.dt; }
+  int64_t steps_taken() const { return steps_; }
+  const std::vector<double>& displacements() const { return u_; }  // #N x 3 mm
+  const std::vector<double>& velocities() const { return v_; }     // #N x 3 mm/s
+  double kinetic_energy() const;   // sum_i m_i |v_i|^2 / 2, nJ
+  double strain_energy() const;    // nJ (fem_strain_energy)
+
+ private:
+  bool advance(double h, const std::vector<double>& start, double fraction, FemImplicitStepReport& report, std::string& failure);
+
+  const FemModel& model_;
+  FemImplicitOptions options_;
+  std::unique_ptr<DeviceConjugateGradient> device_cg_;
+  std::unique_ptr<FemNewton> newton_;
+  std::vector<uint8_t> fixed_;                 // #N x 3 components held at 0
+  std::vector<int32_t> prescribed_nodes_;
+  std::vector<double> prescribed_;             // #G x 3
+  std::vector<double> external_;               // #N x 3 forces + weight
+  std::vector<double> forces_;                 // #N x 3 (set_external_forces)
+  std::vector<double> u_, v_;
+  double time_ = 0;
+  int64_t steps_ = 0;
+};
+
+}  // namespace ctsurg::sim

@@ -1,0 +1,239 @@
+// Tests of ctsurg/sim/fem/fem_implicit_dynamics.h: free fall exact, a run settling to the static
+// solution for every law, frame-sized steps stable on stiff tissue with the energy decaying after a
+// release, Rayleigh damping making the decay faster, a grab held at its target, supports of single
+// components, a failed step retried in halves and, past the limit, a RuntimeError that leaves the state.
+#include "ctsurg/sim/fem/fem_implicit_dynamics.h"
+
+#include "ctsurg/core/error.h"
+#include "ctsurg/sim/fem/fem_static_solver.h"
+#include "fem_test_models.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <string>
+
+namespace ctsurg::sim {
+namespace {
+
+using test::nodes_where;
+
+FemModel beam(FemMaterialModel law, double youngs_pa = 3e4, std::array<int, 3> cells = {6, 2, 2}) {
+  return test::fem_box_model(law, cells, {12, 4, 4}, youngs_pa, 0.3);
+}
+
+double max_abs_difference(const std::vector<double>& a, const std::vector<double>& b) {
+  double d = 0;
+  for (std::size_t k = 0; k < a.size(); ++k) d = std::max(d, std::abs(a[k] - b[k]));
+  return d;
+}
+
+double max_abs(const std::vector<double>& a) {
+  double d = 0;
+  for (double v : a) d = std::max(d, std::abs(v));
+  return d;
+}
+
+TEST(FemImplicitDynamics, FreeFallIsExactForConstantAcceleration) {
+  // A rigid translation strains nothing; backward Euler gives v_n = g h n, u_n = g h^2 n (n + 1) / 2.
+  for (auto law : {FemMaterialModel::linear, FemMaterialModel::neo_hookean, FemMaterialModel::corotational}) {
+    const FemModel m = beam(law, 3e4, {2, 1, 1});
+    FemImplicitOptions o;
+    o.gravity = {0, 0, -9810};
+    FemImplicitDynamics d(m, o);
+    d.step(10);
+    const double h = d.dt();
+    const double expected = -9810 * h * h * 10 * 11 / 2;
+    for (int32_t i = 0; i < m.node_count(); ++i) {
+      EXPECT_NEAR(d.displacements()[3 * i + 2], expected, 1e-6 * std::abs(expected)) << fem_material_model_name(law);
+      EXPECT_NEAR(d.velocities()[3 * i + 2], -9810 * h * 10, 1e-6 * 9810 * h * 10);
+      EXPECT_NEAR(d.displacements()[3 * i], 0, 1e-9);
+    }
+    EXPECT_NEAR(d.time(), 10 * h, 1e-15);
+    EXPECT_EQ(d.steps_taken(), 10);
+  }
+}
+
+TEST(FemImplicitDynamics, FrameStepsSettleToTheStaticSolutionForEveryLaw) {
+  // A cantilever sagging under gravity, steps of a frame (1/60 s, thousands of times the explicit
+  // critical step): backward Euler's own damping settles it without Rayleigh damping, to the static
+  // equilibrium of the same law.
+  for (auto law : {FemMaterialModel::linear, FemMaterialModel::stvk, FemMaterialModel::neo_hookean,
+                   FemMaterialModel::corotational}) {
+    const FemModel m = beam(law);
+    FemBoundaryConditions bc;
+    bc.fixed_nodes = nodes_where(m, 0, 0.0);
+    FemLoads loads;
+    loads.gravity = {0, 0, -9810};
+    FemStaticOptions so;
+    so.tolerance_mm = 1e-7;
+    const auto stat = solve_fem_static(m, bc, loads, so);
+    FemImplicitOptions o;
+    o.gravity = loads.gravity;
+    o.newton.tolerance_mm = 1e-7;
+    FemImplicitDynamics d(m, o);
+    d.set_supports(bc.fixed_nodes);
+    const auto rep = d.step(120);
+    const double err = max_abs_difference(d.displacements(), stat.displacements);
+    const double sag = max_abs(stat.displacements);
+    std::printf("%s: 120 implicit steps of 1/60 s vs static: %.3g mm of a %.3g mm sag, %d Newton iterations, %d factorisations\n",
+                fem_material_model_name(law), err, sag, rep.newton_iterations, rep.factorizations);
+    EXPECT_GT(sag, 0.1);
+    EXPECT_LT(err, 1e-4 * sag) << fem_material_model_name(law);
+    EXPECT_LT(d.kinetic_energy(), 1e-8 * d.strain_energy());
+    EXPECT_EQ(rep.substeps, 1);
+  }
+}
+
+// Kinetic + strain energy after each step, from a grab released at rest.
+std::vector<double> energies_after_release(const FemModel& m, double mass_damping, double stiffness_damping, int steps) {
+  FemImplicitOptions o;
+  o.mass_damping = mass_damping;
+  o.stiffness_damping = stiffness_damping;
+  o.newton.tolerance_mm = 1e-8;  // the integrator's dissipation, not the solver's tolerance
+  FemImplicitDynamics d(m, o);
+  d.set_supports(nodes_where(m, 0, 0.0));
+  const auto tip = nodes_where(m, 0, 12.0);
+  d.set_prescribed(tip, std::vector<double>(3 * tip.size(), 0.0));
+  std::vector<double> target(3 * tip.size(), 0.0);
+  for (std::size_t g = 0; g < tip.size(); ++g) target[3 * g + 2] = 3.0;  // 3 mm up, a quarter of the length
+  d.set_prescribed(tip, target);
+  d.step(1);
+  d.clear_prescribed();
+  std::vector<double> e;
+  e.push_back(d.kinetic_energy() + d.strain_energy());
+  for (int k = 0; k < steps; ++k) {
+    d.step(1);
+    for (double v : d.displacements()) EXPECT_TRUE(std::isfinite(v));
+    e.push_back(d.kinetic_energy() + d.strain_energy());
+  }
+  return e;
+}
+
+TEST(FemImplicitDynamics, FrameStepsOnStiffTissueAreStableAndTheEnergyOnlyDecays) {
+  // 1 MPa (cartilage-like, 30 times the heart's stiffness): the explicit critical step is about 2 us;
+  // a frame is 8,000 of them. After a release the total energy never grows (backward Euler dissipates).
+  for (auto law : {FemMaterialModel::linear, FemMaterialModel::neo_hookean, FemMaterialModel::corotational}) {
+    const FemModel m = beam(law, 1e6);
+    const auto e = energies_after_release(m, 0, 0, 30);
+    for (std::size_t k = 1; k < e.size(); ++k)  // to round-off (1e-12 of the start)
+      EXPECT_LE(e[k], e[k - 1] * (1 + 1e-9) + 1e-12 * e[0]) << fem_material_model_name(law) << " step " << k;
+    EXPECT_LT(e.back(), 1e-3 * e.front()) << fem_material_model_name(law);
+    std::printf("%s, 1 MPa: energy %.3g nJ after release, %.3g after 1 step, %.3g after 30 steps of 1/60 s\n",
+                fem_material_model_name(law), e[0], e[1], e.back());
+  }
+}
+
+TEST(FemImplicitDynamics, RayleighDampingRemovesEnergyFaster) {
+  // A soft beam (3 kPa) whose first mode is slow enough (wh < 1) to ring under backward Euler alone.
+  const FemModel m = beam(FemMaterialModel::neo_hookean, 3e3);
+  const auto none = energies_after_release(m, 0, 0, 10);
+  const auto mass = energies_after_release(m, 20, 0, 10);
+  const auto stiff = energies_after_release(m, 0, 0.02, 10);
+  std::printf("energy left after 10 steps: no Rayleigh damping %.3g, alpha 20/s %.3g, beta 0.02 s %.3g (of %.3g)\n", none.back(),
+              mass.back(), stiff.back(), none.front());
+  EXPECT_LT(mass.back(), none.back());
+  EXPECT_LT(stiff.back(), none.back());
+  EXPECT_GT(none.back(), 1e-6 * none.front());  // the undamped decay is visible but not instant
+}
+
+TEST(FemImplicitDynamics, AGrabIsHeldAtItsTargetAndComponentSupportsHoldOnlyTheirAxis) {
+  const FemModel m = beam(FemMaterialModel::neo_hookean);
+  FemImplicitDynamics d(m);
+  // The root on a roller in x only, plus what removes the remaining rigid motions.
+  const auto root = nodes_where(m, 0, 0.0);
+  std::vector<int32_t> components;
+  for (int32_t i : root) components.push_back(3 * i);
+  components.push_back(3 * root[0] + 1);
+  components.push_back(3 * root[0] + 2);
+  components.push_back(3 * root[1] + 2);
+  components.push_back(3 * root[2] + 1);
+  d.set_supports({}, components);
+  const auto tip = nodes_where(m, 0, 12.0);
+  std::vector<double> target(3 * tip.size(), 0.0);
+  for (std::size_t g = 0; g < tip.size(); ++g) target[3 * g] = 1.2;  // a 10 % stretch
+  d.set_prescribed(tip, target);
+  d.step(60);
+  for (std::size_t g = 0; g < tip.size(); ++g)
+    for (int a = 0; a < 3; ++a) EXPECT_DOUBLE_EQ(d.displacements()[3 * tip[g] + a], target[3 * g + a]);
+  double lateral = 0;
+  for (int32_t i : root) {
+    EXPECT_EQ(d.displacements()[3 * i], 0.0);
+    lateral = std::max(lateral, std::abs(d.displacements()[3 * i + 1]) + std::abs(d.displacements()[3 * i + 2]));
+  }
+  EXPECT_GT(lateral, 1e-3);  // the root contracts sideways (Poisson) on its roller: y and z are free
+  EXPECT_THROW(d.set_supports({}, {3 * m.node_count()}), InputError);
+  EXPECT_THROW(d.set_supports({-1}), InputError);
+}
+
+TEST(FemImplicitDynamics, AFailedStepIsRetriedInHalvesAndPastTheLimitLeavesTheState) {
+  const FemModel m = beam(FemMaterialModel::neo_hookean);
+  const auto root = nodes_where(m, 0, 0.0);
+  const auto tip = nodes_where(m, 0, 12.0);
+  std::vector<double> target(3 * tip.size(), 0.0);
+  for (std::size_t g = 0; g < tip.size(); ++g) target[3 * g + 2] = 8.0;  // two thirds of the length in one frame
+  FemImplicitOptions o;
+  o.newton.max_newton_iterations = 3;
+  o.max_halvings = 0;
+  {
+    FemImplicitDynamics d(m, o);
+    d.set_supports(root);
+    d.step(2);
+    const auto before = d.displacements();
+    d.set_prescribed(tip, target);
+    try {
+      d.step(1);
+      FAIL() << "a step that cannot converge in 3 Newton iterations was accepted";
+    } catch (const RuntimeError& e) {
+      const std::string msg = e.what();
+      EXPECT_NE(msg.find("t = "), std::string::npos) << msg;
+      EXPECT_NE(msg.find("sub-steps"), std::string::npos) << msg;
+    }
+    EXPECT_EQ(d.displacements(), before);
+    EXPECT_EQ(d.steps_taken(), 2);
+  }
+  o.max_halvings = 6;
+  FemImplicitDynamics d(m, o);
+  d.set_supports(root);
+  d.set_prescribed(tip, target);
+  const auto rep = d.step(1);
+  EXPECT_GT(rep.substeps, 1);
+  EXPECT_EQ(d.steps_taken(), 1);
+  for (double v : d.displacements()) EXPECT_TRUE(std::isfinite(v));
+}
+
+TEST(FemImplicitDynamics, OptionsOutOfRangeNameTheirField) {
+  const FemModel m = beam(FemMaterialModel::linear, 3e4, {2, 1, 1});
+  const auto field_of = [&](const FemImplicitOptions& o) -> std::string {
+    try {
+      FemImplicitDynamics d(m, o);
+    } catch (const InputError& e) {
+      return e.field();
+    }
+    return "";
+  };
+  FemImplicitOptions o;
+  o.dt = 0;
+  EXPECT_EQ(field_of(o), "dt");
+  o = {};
+  o.mass_damping = -1;
+  EXPECT_EQ(field_of(o), "mass_damping");
+  o = {};
+  o.stiffness_damping = std::nan("");
+  EXPECT_EQ(field_of(o), "stiffness_damping");
+  o = {};
+  o.gravity = {0, INFINITY, 0};
+  EXPECT_EQ(field_of(o), "gravity");
+  o = {};
+  o.max_halvings = 21;
+  EXPECT_EQ(field_of(o), "max_halvings");
+  FemImplicitDynamics d(m);
+  EXPECT_THROW(d.set_external_forces({1.0, 2.0}), InputError);
+  EXPECT_THROW(d.set_prescribed({0}, {1.0}), InputError);
+  EXPECT_THROW(d.step(-1), InputError);
+}
+
+}  // namespace
+}  // namespace ctsurg::sim
