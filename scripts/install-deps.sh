@@ -10,7 +10,7 @@ packages=(
   # libraries (docs/architecture.md says which stage uses which)
   libeigen3-dev libhdf5-dev libinsighttoolkit5-dev libgdcm-dev libopencv-dev libcgal-dev libassimp-dev
   libosmesa6-dev libcli11-dev libspdlog-dev nlohmann-json3-dev libyaml-cpp-dev libssl-dev zlib1g-dev
-  # fuzzing: clang with libFuzzer and the sanitizer runtimes (fuzz/README.md)
+  # fuzzing: clang with libFuzzer and the sanitizer runtimes (tests/fuzz/README.md)
   clang libclang-rt-14-dev
   # the FEM's sparse Cholesky (CHOLMOD) and the BLAS it runs on (OpenBLAS over Debian's reference BLAS)
   libsuitesparse-dev libopenblas0-pthread

@@ -365,7 +365,7 @@ static Scenario parse_fields(const std::string& text, const fs::path& file, cons
 
 Scenario parse_scenario(const std::string& text, const fs::path& file, const fs::path& base_dir) {
   // The field checks read the document through yaml-cpp, which throws its own exceptions on shapes
-  // they did not foresee (found by fuzz/fuzz_scenario.cpp); every one is bad input.
+  // they did not foresee (found by tests/fuzz/fuzz_scenario.cpp); every one is bad input.
   try {
     return parse_fields(text, file, base_dir);
   } catch (const YAML::Exception& e) {

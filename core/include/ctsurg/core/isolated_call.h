@@ -1,6 +1,6 @@
 // A library call that may crash, run in a child process. GDCM, which ctsurg uses to read DICOM,
 // asserts on damaged files (Debian builds it with assertions: "Should not happen" aborts found by
-// fuzz/fuzz_dicom_folder.cpp) and allocates what a header declares; no check before it can foresee
+// tests/fuzz/fuzz_dicom_folder.cpp) and allocates what a header declares; no check before it can foresee
 // every such path. In a forked child a crash becomes a clear refusal of the input instead of the
 // tool's death.
 //

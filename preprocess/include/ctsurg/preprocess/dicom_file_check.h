@@ -1,6 +1,6 @@
 // What ctsurg verifies in a DICOM file before GDCM reads it. GDCM allocates the length an element
 // declares before reading its value, so a 1.5 KB file whose header claims a 3 GB element made the
-// importer allocate (and zero) 3 GB (found by fuzz/fuzz_dicom_folder.cpp). Every element of a Part 10
+// importer allocate (and zero) 3 GB (found by tests/fuzz/fuzz_dicom_folder.cpp). Every element of a Part 10
 // file is walked (PS3.5 7.1: explicit or implicit VR, little or big endian; sequences and items of
 // undefined length down to 64 levels, PS3.5 7.5; encapsulated pixel data as items, PS3.5 A.4) and
 // each defined length must fit in the bytes left in the file.

@@ -1,11 +1,11 @@
 #!/usr/bin/env bash
-# fuzz/make_seeds.sh BIN OUT: the seed corpus of every fuzz target, one folder per target under OUT,
+# tests/fuzz/make_seeds.sh BIN OUT: the seed corpus of every fuzz target, one folder per target under OUT,
 # from data_samples (the heart mask, the scenarios) and from small files the release tools in BIN
 # make (a phantom in each image format, and the ctsurg files of the pipeline on it). Deterministic.
 set -euo pipefail
 bin=$(cd "$1" && pwd)
 out=$2
-root=$(cd "$(dirname "$0")/.." && pwd)
+root=$(cd "$(dirname "$0")/../.." && pwd)
 rm -rf "$out"
 mkdir -p "$out"/{fuzz_nifti,fuzz_nrrd,fuzz_metaimage,fuzz_dicom_folder,fuzz_scenario}
 mkdir -p "$out"/{fuzz_hu_volume_file,fuzz_occupancy_grid_file,fuzz_surface_mesh_file,fuzz_tet_mesh_file,fuzz_trajectory_file}
