@@ -47,5 +47,5 @@ cp "$work/tetmesh.h5" "$out/fuzz_tet_mesh_file/"
 cp "$work/trajectory.h5" "$out/fuzz_trajectory_file/"
 cp "$work/pull.yaml" "$out/fuzz_scenario/"
 
-python3 "$root/fuzz/make_dicom_seed.py" "$out/fuzz_dicom_folder/two_slices.bin"
+python3 "$root/tests/fuzz/make_dicom_seed.py" "$out/fuzz_dicom_folder/two_slices.bin"
 echo "fuzz seeds: $(find "$out" -type f | wc -l) files, $(du -sk "$out" | cut -f1) KiB in $out"

@@ -20,7 +20,7 @@ if ((${#targets[@]} == 0)); then
 fi
 mkdir -p build-fuzz/findings build-fuzz/logs
 # Third-party leaks on error paths are suppressed (tests/fuzz/lsan.supp says which and why).
-export LSAN_OPTIONS="suppressions=$PWD/fuzz/lsan.supp:print_suppressions=0"
+export LSAN_OPTIONS="suppressions=$PWD/tests/fuzz/lsan.supp:print_suppressions=0"
 export UBSAN_OPTIONS="print_stacktrace=1"
 run_one() {
   local t=$1 seconds=$2
