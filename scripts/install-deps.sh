@@ -10,6 +10,8 @@ packages=(
   # libraries (docs/architecture.md says which stage uses which)
   libeigen3-dev libhdf5-dev libinsighttoolkit5-dev libgdcm-dev libopencv-dev libcgal-dev libassimp-dev
   libosmesa6-dev libcli11-dev libspdlog-dev nlohmann-json3-dev libyaml-cpp-dev libssl-dev zlib1g-dev
+  # fuzzing: clang with libFuzzer and the sanitizer runtimes (tests/fuzz/README.md)
+  clang libclang-rt-14-dev
   # the FEM's sparse Cholesky (CHOLMOD) and the BLAS it runs on (OpenBLAS over Debian's reference BLAS)
   libsuitesparse-dev libopenblas0-pthread
   # tests and benchmarks; dcm2niix, python3-nibabel/vtk9 and tetgen are the peers we validate against

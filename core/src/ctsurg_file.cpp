@@ -1,40 +1,38 @@
 #include "ctsurg/core/ctsurg_file.h"
 
 #include "ctsurg/core/atomic_output.h"
+#include "ctsurg/core/checked_write.h"
 #include "ctsurg/core/error.h"
-
-#include <fstream>
 
 namespace ctsurg {
 
 void write_ctsurg_file(const std::filesystem::path& path, const std::string& format, int64_t format_version,
                        const Provenance& provenance, const std::function<void(h5::Group& root)>& fill,
-                       const std::vector<XdmfLattice>& lattices) {
-  write_ctsurg_file(path, format, format_version, provenance, fill, xdmf_document(path.filename().string(), lattices));
+                       const std::vector<XdmfLattice>& lattices, OutputUnit* unit) {
+  write_ctsurg_file(path, format, format_version, provenance, fill, xdmf_document(path.filename().string(), lattices),
+                    unit);
 }
 
 void write_ctsurg_file(const std::filesystem::path& path, const std::string& format, int64_t format_version,
                        const Provenance& provenance, const std::function<void(h5::Group& root)>& fill,
-                       const std::string& sidecar_xml) {
-  AtomicOutput out(path);
-  AtomicOutput sidecar(xdmf_path_for(path));
+                       const std::string& sidecar_xml, OutputUnit* unit) {
+  OutputUnit own;
+  OutputUnit& outputs = unit ? *unit : own;
+  AtomicOutput& out = outputs.add(path);
+  AtomicOutput& sidecar = outputs.add(xdmf_path_for(path));
   {
     h5::File f = h5::File::create(out.temp_path(), path.string());
-    h5::Group root = f.root();
-    root.set_attribute("ctsurg_format", format);
-    root.set_attribute("ctsurg_format_version", format_version);
-    provenance.write(root);
-    fill(root);
+    {
+      h5::Group root = f.root();
+      root.set_attribute("ctsurg_format", format);
+      root.set_attribute("ctsurg_format_version", format_version);
+      provenance.write(root);
+      fill(root);
+    }
     f.close();
   }
-  {
-    std::ofstream s(sidecar.temp_path(), std::ios::binary);
-    s << sidecar_xml;
-    s.close();
-    if (!s) throw RuntimeError(sidecar.path().string() + ": cannot write");
-  }
-  out.commit();
-  sidecar.commit();
+  write_file_checked(sidecar.temp_path(), sidecar_xml, sidecar.path().string());
+  if (!unit) own.commit();
 }
 
 std::string ctsurg_file_format(const std::filesystem::path& path) {

@@ -1,10 +1,13 @@
 #include "ctsurg/core/hdf5_file.h"
 
 #include "ctsurg/core/error.h"
+#include "ctsurg/core/input_file.h"
 #include "ctsurg/core/memory_guard.h"
 
 #include <algorithm>
+#include <array>
 #include <cstring>
+#include <fstream>
 #include <numeric>
 
 namespace ctsurg::h5 {
@@ -70,6 +73,12 @@ void Handle::reset() {
   id_ = -1;
 }
 
+herr_t Handle::close() {
+  const herr_t status = id_ >= 0 && closer_ ? closer_(id_) : herr_t{0};
+  id_ = -1;
+  return status;
+}
+
 template <> hid_t native_type<uint8_t>() { return H5T_NATIVE_UINT8; }
 template <> hid_t native_type<int8_t>() { return H5T_NATIVE_INT8; }
 template <> hid_t native_type<int16_t>() { return H5T_NATIVE_INT16; }
@@ -107,11 +116,16 @@ void Group::write_dataset(const std::string& name, const T* data, std::span<cons
   Handle space = dataspace(shape);
   Handle dcpl(H5Pcreate(H5P_DATASET_CREATE), H5Pclose);
   H5Pset_obj_track_times(dcpl.get(), false);
-  if (count >= 256) {
+  if (count > 0) {
+    // Every non-empty dataset is chunked so that its data carries a Fletcher-32 checksum (applied
+    // last, over the compressed bytes); small ones are not worth compressing.
     const auto chunk = chunk_shape(shape);
     H5Pset_chunk(dcpl.get(), static_cast<int>(chunk.size()), chunk.data());
-    H5Pset_shuffle(dcpl.get());
-    H5Pset_deflate(dcpl.get(), 4);
+    if (count >= 256) {
+      H5Pset_shuffle(dcpl.get());
+      H5Pset_deflate(dcpl.get(), 4);
+    }
+    H5Pset_fletcher32(dcpl.get());
   }
   Handle ds(H5Dcreate2(id(), name.c_str(), native_type<T>(), space.get(), H5P_DEFAULT, dcpl.get(), H5P_DEFAULT),
             H5Dclose);
@@ -142,7 +156,12 @@ std::string Group::dataset_type_name(const std::string& name) const {
 template <class T>
 std::vector<T> Group::read_dataset(const std::string& name, std::vector<uint64_t>* shape_out) const {
   const auto shape = dataset_shape(name);
-  const uint64_t count = std::accumulate(shape.begin(), shape.end(), uint64_t{1}, std::multiplies<>());
+  uint64_t count = 1;
+  for (const uint64_t d : shape) {
+    if (__builtin_mul_overflow(count, d, &count)) {
+      throw InputError(file_, child_path(name), "dataset shape overflows 2^64 values (corrupt file)");
+    }
+  }
   check_allocation(count, sizeof(T), file_, child_path(name));
   Handle ds(H5Dopen2(id(), name.c_str(), H5P_DEFAULT), H5Dclose);
   std::vector<T> out(static_cast<std::size_t>(count));
@@ -265,23 +284,59 @@ std::vector<int64_t> Group::ints_attribute(const std::string& name) const {
   return read_numeric_attribute<int64_t>(*this, name);
 }
 
+namespace {
+
+// The HDF5 file signature (HDF5 File Format Specification, section II.A): at byte 0, or at 512,
+// 1024, 2048, ... after a user block. The superblock version is the byte after it.
+constexpr std::array<unsigned char, 8> kSignature{0x89, 'H', 'D', 'F', '\r', '\n', 0x1a, '\n'};
+
+// The superblock version, or -1 when the file holds no HDF5 signature.
+int superblock_version(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  in.seekg(0, std::ios::end);
+  const auto size = static_cast<uint64_t>(std::max<std::streamoff>(in.tellg(), 0));
+  for (uint64_t at = 0; at + kSignature.size() < size; at = at == 0 ? 512 : 2 * at) {
+    std::array<char, 9> head{};
+    in.seekg(static_cast<std::streamoff>(at));
+    if (!in.read(head.data(), head.size())) return -1;
+    if (std::memcmp(head.data(), kSignature.data(), kSignature.size()) == 0) return static_cast<unsigned char>(head[8]);
+  }
+  return -1;
+}
+
+}  // namespace
+
 File File::create(const std::filesystem::path& path, const std::string& display_name) {
+  const std::string name = display_name.empty() ? path.string() : display_name;
   Handle fcpl(H5Pcreate(H5P_FILE_CREATE), H5Pclose);
   H5Pset_obj_track_times(fcpl.get(), false);
   H5Pset_link_creation_order(fcpl.get(), H5P_CRT_ORDER_TRACKED);
-  Handle f(H5Fcreate(path.c_str(), H5F_ACC_TRUNC, fcpl.get(), H5P_DEFAULT), H5Fclose);
-  const std::string name = display_name.empty() ? path.string() : display_name;
+  Handle fapl(H5Pcreate(H5P_FILE_ACCESS), H5Pclose);
+  // HDF5 1.10's format: checksums on all metadata; readable by HDF5 1.10 and later.
+  if (H5Pset_libver_bounds(fapl.get(), H5F_LIBVER_V110, H5F_LIBVER_V110) < 0 ||
+      H5Pset_fapl_core(fapl.get(), std::size_t{4} << 20, true) < 0 ||
+      // close() writes the file now, even while a group or dataset handle is still open.
+      H5Pset_fclose_degree(fapl.get(), H5F_CLOSE_STRONG) < 0) {
+    throw RuntimeError(name + ": cannot set up the HDF5 file");
+  }
+  Handle f(H5Fcreate(path.c_str(), H5F_ACC_TRUNC, fcpl.get(), fapl.get()), H5Fclose);
   if (!f.valid()) throw RuntimeError(name + ": cannot create HDF5 file");
-  return File(std::move(f), name);
+  return File(std::move(f), name, path);
 }
 
 File File::open(const std::filesystem::path& path) {
   const std::string name = path.string();
-  if (!std::filesystem::exists(path)) throw InputError(name, "", "file does not exist");
-  if (std::filesystem::is_directory(path)) throw InputError(name, "", "is a folder, expected an HDF5 file");
-  if (H5Fis_hdf5(path.c_str()) <= 0) throw InputError(name, "", "not an HDF5 file (or corrupt)");
+  check_input_file(path);
+  const int version = superblock_version(path);
+  if (version < 0 || H5Fis_hdf5(path.c_str()) <= 0) throw InputError(name, "", "not an HDF5 file (or corrupt)");
+  if (version < 2) {
+    throw InputError(name, "superblock",
+                     "HDF5 superblock version " + std::to_string(version) +
+                         " has no checksums, so the file cannot be verified: it was not written by this version of "
+                         "ctsurg; run the stage that made it again");
+  }
   Handle f(H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose);
-  if (!f.valid()) throw InputError(name, "", "cannot open HDF5 file (corrupt or unreadable)");
+  if (!f.valid()) throw InputError(name, "", "cannot open HDF5 file (corrupt, truncated or unreadable)");
   return File(std::move(f), name);
 }
 
@@ -292,10 +347,18 @@ Group File::root() const {
 }
 
 void File::close() {
-  if (h_.valid()) {
-    H5Fflush(h_.get(), H5F_SCOPE_GLOBAL);
+  if (!h_.valid()) return;
+  if (write_to_.empty()) {
     h_.reset();
+    return;
   }
+  // The core driver writes the whole file on flush and close, checking each write; its close(2)
+  // is not checked, so the file is opened again: a file that does not open (cut short, bad
+  // checksum) is an error here, and AtomicOutput's fsync catches what the device reports late.
+  if (H5Fflush(h_.get(), H5F_SCOPE_GLOBAL) < 0) throw RuntimeError(name_ + ": HDF5 failed to write the file");
+  if (h_.close() < 0) throw RuntimeError(name_ + ": HDF5 failed to write and close the file");
+  Handle check(H5Fopen(write_to_.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose);
+  if (!check.valid() || check.close() < 0) throw RuntimeError(name_ + ": the file written does not read back");
 }
 
 }  // namespace ctsurg::h5

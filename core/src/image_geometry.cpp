@@ -35,16 +35,34 @@ bool ImageGeometry::same_lattice(const ImageGeometry& other, double tolerance_mm
 }
 
 void ImageGeometry::validate(const std::string& file) const {
+  int64_t count = 1;
   for (int a = 0; a < 3; ++a) {
     if (dims[a] <= 0) {
       throw InputError(file, "dims", "dimension " + std::to_string(a) + " must be positive, got " + std::to_string(dims[a]));
+    }
+    if (__builtin_mul_overflow(count, dims[a], &count) || count > kMaxVoxels) {
+      throw InputError(file, "dims",
+                       std::to_string(dims[0]) + " x " + std::to_string(dims[1]) + " x " + std::to_string(dims[2]) +
+                           " voxels: more than 2^48, not an image");
     }
     if (!std::isfinite(spacing[a]) || spacing[a] <= 0.0) {
       std::ostringstream s;
       s << "spacing along axis " << a << " must be a positive number of mm, got " << spacing[a];
       throw InputError(file, "spacing", s.str());
     }
+    if (spacing[a] < kMinSpacingMm || spacing[a] > kMaxSpacingMm) {
+      std::ostringstream s;
+      s << "spacing along axis " << a << " is " << spacing[a] << " mm, outside [" << kMinSpacingMm << ", "
+        << kMaxSpacingMm << "] mm (corrupt header?)";
+      throw InputError(file, "spacing", s.str());
+    }
     if (!std::isfinite(origin[a])) throw InputError(file, "origin", "origin is not finite");
+    if (std::abs(origin[a]) > kMaxCoordinateMm || spacing[a] * static_cast<double>(dims[a]) > kMaxCoordinateMm) {
+      std::ostringstream s;
+      s << "the lattice reaches " << std::abs(origin[a]) + spacing[a] * static_cast<double>(dims[a])
+        << " mm from the scanner's origin along axis " << a << ", more than " << kMaxCoordinateMm << " mm (corrupt header?)";
+      throw InputError(file, "origin", s.str());
+    }
     const double len = direction.col(a).norm();
     if (!direction.col(a).allFinite() || std::abs(len - 1.0) > 1e-3) {
       std::ostringstream s;

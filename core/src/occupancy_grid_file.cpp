@@ -15,7 +15,7 @@ int64_t OccupancyGrid::particle_count() const {
 }
 
 void write_occupancy_grid_file(const std::filesystem::path& path, const OccupancyGrid& grid,
-                               const Provenance& provenance) {
+                               const Provenance& provenance, OutputUnit* unit) {
   write_ctsurg_file(
       path, "occupancy_grid", 1, provenance,
       [&](h5::Group& root) {
@@ -36,7 +36,7 @@ void write_occupancy_grid_file(const std::filesystem::path& path, const Occupanc
         {{"occupancy", "/grid/occupancy/data", VoxelType::UInt8},
          {"fraction", "/grid/fraction/data", VoxelType::Float32},
          {"label", "/grid/label/data", VoxelType::UInt16}}},
-       {"mask", grid.mask.geometry, {{"mask", "/mask/data", VoxelType::UInt16}}}});
+       {"mask", grid.mask.geometry, {{"mask", "/mask/data", VoxelType::UInt16}}}}, unit);
 }
 
 OccupancyGrid read_occupancy_grid_file(const std::filesystem::path& path) {

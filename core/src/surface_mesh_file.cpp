@@ -2,6 +2,7 @@
 
 #include "ctsurg/core/ctsurg_file.h"
 #include "ctsurg/core/error.h"
+#include "ctsurg/core/finite_values.h"
 #include "ctsurg/core/hdf5_file.h"
 
 #include <array>
@@ -50,6 +51,10 @@ void check_sizes(const SurfaceMesh& m, const std::string& file) {
     throw InputError(file, "/surface",
                      "optional per-vertex arrays (uvs, tangents, source_vertex) differ in length from the vertex array");
   }
+  require_finite(m.vertices, 3, file, "/surface/vertices");
+  require_finite(m.normals, 3, file, "/surface/normals");
+  require_finite(m.grid_weights, 8, file, "/surface/grid_weights");
+  require_finite(m.tangents, 4, file, "/surface/tangents");
   for (const float u : m.uvs) {
     if (!(u >= 0.0f && u <= 1.0f)) throw InputError(file, "/surface/uvs", "texture coordinates must lie in [0, 1]");
   }
@@ -76,7 +81,8 @@ void check_sizes(const SurfaceMesh& m, const std::string& file) {
 
 }  // namespace
 
-void write_surface_mesh_file(const std::filesystem::path& path, const SurfaceMesh& mesh, const Provenance& provenance) {
+void write_surface_mesh_file(const std::filesystem::path& path, const SurfaceMesh& mesh, const Provenance& provenance,
+                             OutputUnit* unit) {
   check_sizes(mesh, path.string());
   const uint64_t nv = static_cast<uint64_t>(mesh.vertex_count()), nf = static_cast<uint64_t>(mesh.triangle_count());
   write_ctsurg_file(
@@ -127,7 +133,7 @@ void write_surface_mesh_file(const std::filesystem::path& path, const SurfaceMes
           s.set_attribute("normal_map_bits", static_cast<int64_t>(img.bits));
         }
       },
-      surface_xdmf(path.filename().string(), mesh.vertex_count(), mesh.triangle_count()));
+      surface_xdmf(path.filename().string(), mesh.vertex_count(), mesh.triangle_count()), unit);
 }
 
 SurfaceMesh read_surface_mesh_file(const std::filesystem::path& path) {

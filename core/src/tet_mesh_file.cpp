@@ -2,6 +2,7 @@
 
 #include "ctsurg/core/ctsurg_file.h"
 #include "ctsurg/core/error.h"
+#include "ctsurg/core/finite_values.h"
 #include "ctsurg/core/hdf5_file.h"
 
 #include <algorithm>
@@ -50,6 +51,7 @@ void validate_tet_mesh(const TetMesh& m, const std::string& file) {
   if (m.face_labels.size() != 2 * (m.boundary_faces.size() / 3)) {
     throw InputError(file, "/tetmesh/face_labels", "expected two labels per boundary face");
   }
+  require_finite(m.nodes, 3, file, "/tetmesh/nodes");
   const int64_t nn = m.node_count();
   const auto check_indices = [&](const std::vector<int32_t>& idx, const char* name) {
     for (const int32_t i : idx) {

@@ -1,12 +1,14 @@
 #include "ctsurg/core/tool_app.h"
 
 #include "ctsurg/core/error.h"
+#include "ctsurg/core/memory_guard.h"
 #include "ctsurg/core/progress_bar.h"
 #include "ctsurg/core/version.h"
 
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 
+#include <csignal>
 #include <exception>
 #include <iostream>
 #include <new>
@@ -37,15 +39,21 @@ int run_tool(int argc, char** argv, const std::string& name, const std::string& 
   spdlog::set_level(quiet ? spdlog::level::err : verbose ? spdlog::level::debug : spdlog::level::info);
   ProgressBar::set_globally_enabled(!quiet);
 
+  // A file-size limit (ulimit -f) would kill the process with SIGXFSZ, leaving its temporary
+  // files behind; ignored, the write fails with EFBIG and the writer reports it (checked_write.h).
+  std::signal(SIGXFSZ, SIG_IGN);
+
   ToolContext ctx{name, std::vector<std::string>(argv, argv + argc)};
   try {
+    apply_memory_cap();
     run(ctx);
     return 0;
   } catch (const InputError& e) {
     spdlog::error("{}", e.what());
     return 2;
   } catch (const std::bad_alloc&) {
-    spdlog::error("out of memory");
+    const std::string cap = memory_cap_note();
+    spdlog::error("out of memory{}", cap.empty() ? std::string() : " (" + cap + ")");
     return 1;
   } catch (const std::exception& e) {
     spdlog::error("{}", e.what());

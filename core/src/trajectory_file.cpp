@@ -2,6 +2,7 @@
 
 #include "ctsurg/core/ctsurg_file.h"
 #include "ctsurg/core/error.h"
+#include "ctsurg/core/finite_values.h"
 #include "ctsurg/core/hdf5_file.h"
 
 #include <array>
@@ -138,6 +139,15 @@ void validate_trajectory(const Trajectory& t, const std::string& file) {
   if (t.rest_particles.size() % 3 != 0 || t.particles.size() != nf * t.rest_particles.size()) {
     throw InputError(file, "/trajectory/particles", "expected rest_positions (P, 3) and positions (F, P, 3)");
   }
+  // docs/sim.md: a trajectory never holds a non-finite value.
+  require_finite(t.time, 1, file, "/trajectory/time");
+  require_finite(t.rest_vertices, 3, file, "/trajectory/surface/rest_vertices");
+  require_finite(t.vertices, 3 * nv, file, "/trajectory/surface/vertices (row = frame)");
+  for (const auto& m : t.metrics) require_finite(m.values, 1, file, "/trajectory/metrics/" + m.name);
+  require_finite(t.spheres, 4 * t.sphere_kinds.size(), file, "/trajectory/tools/spheres (row = frame)");
+  require_finite(t.blades, 7, file, "/trajectory/tools/blades");
+  require_finite(t.rest_particles, 3, file, "/trajectory/particles/rest_positions");
+  require_finite(t.particles, t.rest_particles.size(), file, "/trajectory/particles/positions (row = frame)");
 }
 
 void write_trajectory_file(const std::filesystem::path& path, const Trajectory& t, const Provenance& provenance) {

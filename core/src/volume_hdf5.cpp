@@ -10,6 +10,23 @@ namespace ctsurg {
 
 namespace {
 
+// NaN and infinity never enter or leave a stage (finite_values.h); a volume names the voxel.
+template <class T>
+void require_finite_voxels(const Volume<T>& v, const std::string& file, const std::string& field) {
+  if constexpr (std::is_floating_point_v<T>) {
+    const auto& d = v.geometry.dims;
+    for (std::size_t n = 0; n < v.voxels.size(); ++n) {
+      if (std::isfinite(v.voxels[n])) continue;
+      const int64_t i = static_cast<int64_t>(n) % d[0], j = static_cast<int64_t>(n) / d[0] % d[1],
+                    k = static_cast<int64_t>(n) / (d[0] * d[1]);
+      throw InputError(file, field,
+                       std::string(std::isnan(v.voxels[n]) ? "NaN" : "an infinite value") + " at voxel (" +
+                           std::to_string(i) + ", " + std::to_string(j) + ", " + std::to_string(k) +
+                           ") (every value must be finite)");
+    }
+  }
+}
+
 template <class S, class T>
 std::vector<S> convert(const std::vector<T>& in) {
   if constexpr (std::is_same_v<S, T>) {
@@ -42,6 +59,12 @@ template <class T>
 void write_volume(h5::Group& parent, const std::string& name, const Volume<T>& volume, const VolumeMeta& meta,
                   VoxelType stored) {
   const ImageGeometry& geo = volume.geometry;
+  geo.validate(parent.file() + ": " + parent.path());
+  if (volume.voxels.size() != static_cast<std::size_t>(geo.voxel_count())) {
+    throw RuntimeError(parent.file() + ": /" + name + ": the volume holds " + std::to_string(volume.voxels.size()) +
+                       " voxels, its dims say " + std::to_string(geo.voxel_count()));
+  }
+  require_finite_voxels(volume, parent.file(), (parent.path() == "/" ? "/" : parent.path() + "/") + name + "/data");
   h5::Group g = parent.create_group(name);
   g.set_attribute("kind", std::string("volume"));
   g.set_attribute("quantity", meta.quantity);
@@ -114,6 +137,7 @@ Volume<T> read_volume(const h5::Group& parent, const std::string& name) {
   v.geometry = read_volume_geometry(parent, name);
   const h5::Group g = parent.open_group(name);
   v.voxels = g.read_dataset<T>("data");
+  require_finite_voxels(v, g.file(), g.path() + "/data");
   return v;
 }
 

@@ -45,15 +45,24 @@ Cell locate(const DetailField& f, const Eigen::Vector3d& p) {
 
 Volume<float> gaussian_smoothed(const Volume<float>& field, double sigma_mm, int threads) {
   if (!std::isfinite(sigma_mm) || sigma_mm < 0.0) throw InputError("--sigma-mm", "", "must be a finite number >= 0");
+  const auto& g = field.geometry;
+  double extent = 0.0;
+  for (int a = 0; a < 3; ++a) extent = std::max(extent, g.spacing[a] * static_cast<double>(g.dims[static_cast<std::size_t>(a)]));
+  if (sigma_mm > extent) {
+    throw InputError("--sigma-mm", "",
+                     std::to_string(sigma_mm) + " mm is wider than the whole field (" + std::to_string(extent) +
+                         " mm): it would smooth it flat; use at most that");
+  }
   Volume<float> out = field;
   if (sigma_mm == 0.0) return out;
-  const auto& g = field.geometry;
   const int64_t nx = g.dims[0], ny = g.dims[1];
   const int64_t stride[3] = {1, nx, nx * ny};
   Volume<float> tmp = field;
   for (int a = 0; a < 3; ++a) {
     const double s = sigma_mm / g.spacing[a];
-    const int r = static_cast<int>(std::ceil(3.0 * s));
+    // Beyond the line's length every tap reads the clamped edge: no wider kernel is needed.
+    const double line = static_cast<double>(g.dims[static_cast<std::size_t>(a)]);
+    const int r = static_cast<int>(std::min(std::ceil(3.0 * s), line));
     if (r == 0) continue;
     std::vector<double> kernel(static_cast<std::size_t>(2 * r + 1));
     double sum = 0.0;

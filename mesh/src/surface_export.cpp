@@ -1,9 +1,13 @@
 #include "ctsurg/mesh/surface_export.h"
 
+#include "ctsurg/core/checked_write.h"
 #include "ctsurg/core/error.h"
+#include "ctsurg/core/library_messages.h"
 #include "ctsurg/mesh/normal_map_png.h"
 
 #include <assimp/Exporter.hpp>
+#include <assimp/IOStream.hpp>
+#include <assimp/IOSystem.hpp>
 #include <assimp/material.h>
 #include <assimp/scene.h>
 
@@ -21,18 +25,61 @@ namespace ctsurg {
 
 namespace {
 
-std::string read_file(const std::filesystem::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+// Assimp's file I/O does not report write errors (a full disk gave a truncated .stl that looked
+// finished), so the exporter writes into memory here and ctsurg writes the bytes itself
+// (checked_write.h). Files are kept by name; reading is not needed by the exporters.
+class MemoryStream final : public Assimp::IOStream {
+ public:
+  explicit MemoryStream(std::string& bytes) : bytes_(bytes) {}
+  size_t Read(void* buffer, size_t size, size_t count) override {
+    const size_t n = std::min(count, size ? (bytes_.size() - std::min(at_, bytes_.size())) / size : 0);
+    std::memcpy(buffer, bytes_.data() + at_, n * size);
+    at_ += n * size;
+    return n;
+  }
+  size_t Write(const void* buffer, size_t size, size_t count) override {
+    const size_t n = size * count;
+    if (at_ + n > bytes_.size()) bytes_.resize(at_ + n);
+    std::memcpy(bytes_.data() + at_, buffer, n);
+    at_ += n;
+    return count;
+  }
+  aiReturn Seek(size_t offset, aiOrigin origin) override {
+    const size_t base = origin == aiOrigin_SET ? 0 : origin == aiOrigin_CUR ? at_ : bytes_.size();
+    at_ = base + offset;
+    return aiReturn_SUCCESS;
+  }
+  size_t Tell() const override { return at_; }
+  size_t FileSize() const override { return bytes_.size(); }
+  void Flush() override {}
 
-void write_file(const std::filesystem::path& p, const std::string& bytes, const std::string& named) {
-  std::ofstream out(p, std::ios::binary | std::ios::trunc);
-  out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-  if (!out.flush()) throw RuntimeError(named + ": write failed");
-}
+ private:
+  std::string& bytes_;
+  size_t at_ = 0;
+};
+
+class MemoryFiles final : public Assimp::IOSystem {
+ public:
+  bool Exists(const char* file) const override { return files_.count(file) > 0; }
+  char getOsSeparator() const override { return '/'; }
+  Assimp::IOStream* Open(const char* file, const char* mode) override {
+    std::string& bytes = files_[file];
+    if (mode && mode[0] == 'w') bytes.clear();
+    if (order_.empty() || std::find(order_.begin(), order_.end(), file) == order_.end()) order_.emplace_back(file);
+    return new MemoryStream(bytes);
+  }
+  void Close(Assimp::IOStream* stream) override { delete stream; }
+  // The files in the order they were first opened.
+  std::vector<std::pair<std::string, std::string>> take() {
+    std::vector<std::pair<std::string, std::string>> out;
+    for (const auto& name : order_) out.emplace_back(name, std::move(files_[name]));
+    return out;
+  }
+
+ private:
+  std::map<std::string, std::string> files_;
+  std::vector<std::string> order_;
+};
 
 void append_u32(std::string& s, uint32_t v) { s.append(reinterpret_cast<const char*>(&v), 4); }
 
@@ -44,10 +91,11 @@ void append_u32(std::string& s, uint32_t v) { s.append(reinterpret_cast<const ch
 // exported vertex is matched to the mesh vertex with the same position and texture coordinates
 // (bit for bit: the joined vertex keeps the data of its first copy; v is compared after the same
 // two float flips, ours and the exporter's, that produced the written value).
-void add_gltf_tangents(const std::filesystem::path& path, bool binary, const SurfaceMesh& mesh, const std::string& named) {
-  std::string file = read_file(path), bin;
+void add_gltf_tangents(std::vector<std::pair<std::string, std::string>>& files, bool binary, const SurfaceMesh& mesh,
+                       const std::string& named) {
+  std::string file = files.front().second, bin;
   nlohmann::json j;
-  std::filesystem::path bin_path;
+  std::string* bin_file = nullptr;
   if (binary) {
     uint32_t json_len = 0, bin_len = 0;
     if (file.size() < 28 || file.compare(0, 4, "glTF") != 0) throw RuntimeError(named + ": unexpected GLB layout");
@@ -58,8 +106,12 @@ void add_gltf_tangents(const std::filesystem::path& path, bool binary, const Sur
     bin = file.substr(28 + json_len, bin_len);
   } else {
     j = nlohmann::json::parse(file);
-    bin_path = path.parent_path() / j.at("buffers").at(0).at("uri").get<std::string>();
-    bin = read_file(bin_path);
+    const std::string uri = j.at("buffers").at(0).at("uri").get<std::string>();
+    for (auto& [name, bytes] : files) {
+      if (std::filesystem::path(name).filename() == uri) bin_file = &bytes;
+    }
+    if (!bin_file) throw RuntimeError(named + ": the glTF exporter wrote no '" + uri + "'");
+    bin = *bin_file;
   }
   auto& primitive = j.at("meshes").at(0).at("primitives").at(0);
   // The floats of a tightly packed float accessor.
@@ -107,8 +159,8 @@ void add_gltf_tangents(const std::filesystem::path& path, bool binary, const Sur
   j["buffers"][0]["byteLength"] = bin.size();
   std::string text = j.dump();
   if (!binary) {
-    write_file(bin_path, bin, named);
-    write_file(path, text, named);
+    *bin_file = bin;
+    files.front().second = text;
     return;
   }
   while (text.size() % 4 != 0) text.push_back(' ');
@@ -120,7 +172,7 @@ void add_gltf_tangents(const std::filesystem::path& path, bool binary, const Sur
   glb += "JSON" + text;
   append_u32(glb, static_cast<uint32_t>(bin.size()));
   glb += std::string("BIN\0", 4) + bin;
-  write_file(path, glb, named);
+  files.front().second = glb;
 }
 
 }  // namespace
@@ -136,14 +188,14 @@ std::string surface_export_format(const std::filesystem::path& path) {
   return "";
 }
 
-void export_surface_mesh(const std::filesystem::path& path, const SurfaceMesh& mesh, const std::filesystem::path& format_of,
-                         const std::string& normal_map_uri) {
-  const std::filesystem::path named = format_of.empty() ? path : format_of;
-  const std::string format = surface_export_format(named);
+std::vector<std::pair<std::string, std::string>> export_surface_mesh(const std::filesystem::path& output,
+                                                                     const SurfaceMesh& mesh,
+                                                                     const std::string& normal_map_uri) {
+  const std::string format = surface_export_format(output);
   if (format.empty()) {
-    throw InputError(named.string(), "suffix", "unknown output format; use .h5, .glb, .gltf, .obj, .stl or .ply");
+    throw InputError(output.string(), "suffix", "unknown output format; use .h5, .glb, .gltf, .obj, .stl or .ply");
   }
-  if (mesh.vertex_count() == 0 || mesh.triangle_count() == 0) throw InputError(named.string(), "surface", "the mesh is empty");
+  if (mesh.vertex_count() == 0 || mesh.triangle_count() == 0) throw InputError(output.string(), "surface", "the mesh is empty");
 
   // The scene owns everything it points to and frees it in its destructor.
   aiScene scene;
@@ -215,58 +267,54 @@ void export_surface_mesh(const std::filesystem::path& path, const SurfaceMesh& m
     m.mFaces[f].mIndices = new unsigned int[3]{mesh.triangles[3 * f], mesh.triangles[3 * f + 1], mesh.triangles[3 * f + 2]};
   }
   Assimp::Exporter exporter;
-  if (exporter.Export(&scene, format, path.string()) != aiReturn_SUCCESS) {
-    throw RuntimeError(named.string() + ": export failed: " + exporter.GetErrorString());
-  }
-  if (!mesh.tangents.empty() && !mesh.uvs.empty() && (format == "glb2" || format == "gltf2")) {
-    add_gltf_tangents(path, format == "glb2", mesh, named.string());
-  }
-}
-
-void write_file_bytes(const std::filesystem::path& path, const std::vector<uint8_t>& bytes, const std::string& name) {
-  std::ofstream f(path, std::ios::binary);
-  f.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
-  if (!f.flush()) throw RuntimeError(name + ": write failed");
-}
-
-PendingSurfaceExport::PendingSurfaceExport(const std::filesystem::path& output, const SurfaceMesh& mesh,
-                                           const std::vector<uint8_t>& normal_map_png)
-    : out_(output) {
-  namespace fs = std::filesystem;
-  if (surface_export_format(output) != "gltf2") {
-    export_surface_mesh(out_.temp_path(), mesh, output);
-    return;
-  }
-  fs::path bin_path = output;
-  bin_path.replace_extension(".bin");
-  bin_ = std::make_unique<AtomicOutput>(bin_path);
-  std::string png_uri;
-  if (!normal_map_png.empty()) {
-    fs::path png_path = output;
-    png_path.replace_filename(output.stem().string() + "_normal_map.png");
-    png_ = std::make_unique<AtomicOutput>(png_path);
-    write_file_bytes(png_->temp_path(), normal_map_png, png_path.string());
-    png_uri = png_path.filename().string();
-  }
-  fs::path dir = out_.temp_path();
-  dir += ".d";
-  fs::create_directory(dir);
-  struct Remove {
-    fs::path p;
-    ~Remove() {
-      std::error_code ec;
-      fs::remove_all(p, ec);
+  auto* files = new MemoryFiles;  // the exporter owns and deletes it
+  exporter.SetIOHandler(files);
+  {
+    LibraryMessages said;
+    if (exporter.Export(&scene, format, output.string()) != aiReturn_SUCCESS) {
+      throw RuntimeError(output.string() + ": export failed: " + with_library_text(exporter.GetErrorString(), said.take()));
     }
-  } remove{dir};
-  export_surface_mesh(dir / output.filename(), mesh, {}, png_uri);
-  fs::rename(dir / output.filename(), out_.temp_path());
-  fs::rename(dir / bin_path.filename(), bin_->temp_path());
+  }
+  std::vector<std::pair<std::string, std::string>> out = files->take();
+  if (out.empty() || std::filesystem::path(out.front().first).filename() != output.filename()) {
+    throw RuntimeError(output.string() + ": the exporter wrote no file of that name");
+  }
+  for (auto& [name, bytes] : out) name = std::filesystem::path(name).filename().string();
+  if (!mesh.tangents.empty() && !mesh.uvs.empty() && (format == "glb2" || format == "gltf2")) {
+    add_gltf_tangents(out, format == "glb2", mesh, output.string());
+  }
+  return out;
 }
 
-void PendingSurfaceExport::commit() {
-  out_.commit();
-  if (bin_) bin_->commit();
-  if (png_) png_->commit();
+std::vector<std::filesystem::path> surface_export_files(const std::filesystem::path& output, bool normal_map) {
+  std::vector<std::filesystem::path> files{output};
+  if (surface_export_format(output) == "gltf2") {
+    std::filesystem::path bin = output;
+    files.push_back(bin.replace_extension(".bin"));
+    if (normal_map) files.push_back(output.parent_path() / (output.stem().string() + "_normal_map.png"));
+  }
+  return files;
+}
+
+void add_surface_export(OutputUnit& unit, const std::filesystem::path& output, const SurfaceMesh& mesh,
+                        const std::vector<uint8_t>& normal_map_png) {
+  const auto paths = surface_export_files(output, !normal_map_png.empty());
+  std::string png_uri;
+  if (paths.size() == 3) {
+    AtomicOutput& png = unit.add(paths[2]);
+    write_file_checked(png.temp_path(), std::string_view(reinterpret_cast<const char*>(normal_map_png.data()),
+                                                         normal_map_png.size()),
+                       paths[2].string());
+    png_uri = paths[2].filename().string();
+  }
+  // A .gltf names its .bin inside the JSON, so the export is made under the final names (in memory)
+  // and each file is then written to the temporary name of its output.
+  for (const auto& [name, bytes] : export_surface_mesh(output, mesh, png_uri)) {
+    const auto path = std::find_if(paths.begin(), paths.end(), [&](const auto& p) { return p.filename() == name; });
+    if (path == paths.end()) throw RuntimeError(output.string() + ": the exporter also wrote an unexpected '" + name + "'");
+    AtomicOutput& out = unit.add(*path);
+    write_file_checked(out.temp_path(), bytes, path->string());
+  }
 }
 
 }  // namespace ctsurg

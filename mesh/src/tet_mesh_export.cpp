@@ -1,5 +1,6 @@
 #include "ctsurg/mesh/tet_mesh_export.h"
 
+#include "ctsurg/core/checked_write.h"
 #include "ctsurg/core/error.h"
 
 #include <spdlog/fmt/fmt.h>
@@ -129,10 +130,7 @@ void export_tet_mesh(const std::filesystem::path& path, const TetMesh& mesh, con
   if (format == "vtu") write_vtu(b, mesh);
   if (format == "msh") write_msh(b, mesh);
   if (format == "mesh") write_medit(b, mesh);
-  std::ofstream out(path, std::ios::binary);
-  out.write(b.data(), static_cast<std::streamsize>(b.size()));
-  out.close();
-  if (!out) throw RuntimeError(named.string() + ": writing failed");
+  write_file_checked(path, std::string_view(b.data(), b.size()), named.string());
 }
 
 }  // namespace ctsurg

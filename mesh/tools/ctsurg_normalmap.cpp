@@ -9,6 +9,7 @@
 #include <optional>
 
 #include "ctsurg/core/atomic_output.h"
+#include "ctsurg/core/checked_write.h"
 #include "ctsurg/core/ctsurg_file.h"
 #include "ctsurg/core/error.h"
 #include "ctsurg/core/hu_volume_file.h"
@@ -17,6 +18,7 @@
 #include "ctsurg/core/surface_mesh_file.h"
 #include "ctsurg/core/tool_app.h"
 #include "ctsurg/core/version.h"
+#include "ctsurg/core/xdmf_sidecar.h"
 #include "ctsurg/mesh/detail_field.h"
 #include "ctsurg/mesh/normal_map_baking.h"
 #include "ctsurg/mesh/normal_map_png.h"
@@ -58,6 +60,31 @@ ctsurg::DetailField read_detail_field(const fs::path& input, std::optional<doubl
                                (format.empty() ? std::string("none") : format) + "'");
 }
 
+// A surface baked from a field it does not lie in would read clamped edge values everywhere: the
+// two files must come from the same patient and frame. Refused when no vertex lies in the field's
+// lattice; a warning when some lie more than a voxel outside it.
+void check_overlap(const ctsurg::SurfaceMesh& surface, const std::string& surface_path, const ctsurg::DetailField& field,
+                   const std::string& field_path) {
+  const auto& g = field.values.geometry;
+  int64_t inside = 0;
+  for (int64_t v = 0; v < surface.vertex_count(); ++v) {
+    const Eigen::Vector3d p(surface.vertices[3 * v], surface.vertices[3 * v + 1], surface.vertices[3 * v + 2]);
+    const Eigen::Vector3d x = field.world_to_index_linear * (p - g.origin);
+    bool in = true;
+    for (int a = 0; a < 3; ++a) in = in && x[a] >= -1.0 && x[a] <= static_cast<double>(g.dims[static_cast<std::size_t>(a)]);
+    inside += in ? 1 : 0;
+  }
+  if (inside == 0) {
+    throw ctsurg::InputError(field_path, "geometry",
+                             "the surface " + surface_path + " lies entirely outside this field's lattice: the two files "
+                             "are not of the same patient and frame");
+  }
+  if (inside < surface.vertex_count()) {
+    spdlog::warn("{}: {} of {} vertices of {} lie outside the field's lattice; their detail comes from its edge",
+                 field_path, surface.vertex_count() - inside, surface.vertex_count(), surface_path);
+  }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -95,7 +122,7 @@ int main(int argc, char** argv) {
         app.add_option("--max-angle-deg", max_angle_deg, "Largest angle between a chart's axis and its triangles' normals")
             ->capture_default_str()
             ->check(CLI::Range(1.0, 85.0));
-        app.add_option("--threads", threads, "OpenMP threads (0: all)")->check(CLI::NonNegativeNumber);
+        app.add_option("--threads", threads, "OpenMP threads (0: all)")->check(CLI::Range(0, 1024));
       },
       [&](const ctsurg::ToolContext& ctx) {
         const auto start = std::chrono::steady_clock::now();
@@ -110,9 +137,14 @@ int main(int argc, char** argv) {
         }
         if (padding > size / 8) throw ctsurg::InputError("--padding", "", "must be at most --size / 8");
         if (*iso_opt && !std::isfinite(iso)) throw ctsurg::InputError("--iso", "", "must be a finite number");
-        ctsurg::check_output_path(out_path);
-        if (!png_path.empty()) ctsurg::check_output_path(png_path);
-        if (!mesh_path.empty()) ctsurg::check_output_path(mesh_path);
+        {
+          std::vector<fs::path> outputs{out_path, ctsurg::xdmf_path_for(out_path)};
+          if (!png_path.empty()) outputs.emplace_back(png_path);
+          if (!mesh_path.empty()) {
+            for (const auto& f : ctsurg::surface_export_files(mesh_path, true)) outputs.push_back(f);
+          }
+          ctsurg::check_output_paths(outputs, {fs::path(surface_path), fs::path(field_path)});
+        }
 
         const ctsurg::SurfaceMesh coarse = ctsurg::read_surface_mesh_file(surface_path);
         if (!coarse.uvs.empty()) {
@@ -122,6 +154,7 @@ int main(int argc, char** argv) {
         std::string described;
         const ctsurg::DetailField field =
             read_detail_field(field_path, *iso_opt ? std::optional<double>(iso) : std::nullopt, sigma_mm, threads, described);
+        check_overlap(coarse, surface_path, field, field_path);
         spdlog::info("{}: {} vertices, {} triangles; detail from {}: {}", surface_path, coarse.vertex_count(),
                      coarse.triangle_count(), field_path, described);
 
@@ -144,22 +177,20 @@ int main(int argc, char** argv) {
             stats.texels_covered, stats.texels_covered ? 100.0 * stats.texels_on_crossing / stats.texels_covered : 0.0,
             stats.search_mm, stats.texels_dilated, stats.mean_tilt_deg, seconds_since(bake_start));
 
-        // Every output goes to a temporary name first; the .h5 is committed last but one step before
-        // the others, so a failure before then leaves none of them.
+        // Every output goes to a temporary name first, and all are committed together.
         const std::vector<uint8_t> png = ctsurg::encode_normal_map_png(mesh.normal_map);
-        std::optional<ctsurg::AtomicOutput> png_out;
+        ctsurg::OutputUnit outputs;
         if (!png_path.empty()) {
-          png_out.emplace(png_path);
-          ctsurg::write_file_bytes(png_out->temp_path(), png, png_path);
+          ctsurg::AtomicOutput& png_out = outputs.add(png_path);
+          ctsurg::write_file_checked(png_out.temp_path(),
+                                     std::string_view(reinterpret_cast<const char*>(png.data()), png.size()), png_path);
         }
-        std::optional<ctsurg::PendingSurfaceExport> mesh_out;
-        if (!mesh_path.empty()) mesh_out.emplace(mesh_path, mesh, png);
+        if (!mesh_path.empty()) ctsurg::add_surface_export(outputs, mesh_path, mesh, png);
         ctsurg::Provenance provenance{ctx.name, ctsurg::kVersion, ctx.command_line, {}, nlohmann::json::array()};
         provenance.add_input(surface_path);
         provenance.add_input(field_path);
-        ctsurg::write_surface_mesh_file(out_path, mesh, provenance);
-        if (png_out) png_out->commit();
-        if (mesh_out) mesh_out->commit();
+        ctsurg::write_surface_mesh_file(out_path, mesh, provenance, &outputs);
+        outputs.commit();
         spdlog::info("wrote {} in {:.2f} s", output,
                      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
       });

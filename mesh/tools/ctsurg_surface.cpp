@@ -10,6 +10,7 @@
 #include "ctsurg/core/surface_mesh_file.h"
 #include "ctsurg/core/tool_app.h"
 #include "ctsurg/core/version.h"
+#include "ctsurg/core/xdmf_sidecar.h"
 #include "ctsurg/mesh/lattice_padding.h"
 #include "ctsurg/mesh/lattice_tie.h"
 #include "ctsurg/mesh/marching_cubes.h"
@@ -61,7 +62,7 @@ int main(int argc, char** argv) {
         app.add_option("input", input, "Occupancy grid (ctsurg-grid) or HU volume (ctsurg-import) file (.h5)")->required();
         app.add_option("output", output, "Surface to write: .h5, .glb, .gltf, .obj, .stl or .ply")->required();
         iso_opt = app.add_option("--iso", iso, "Isovalue: volume fraction for a grid (default 0.5), HU for an HU volume (required)");
-        app.add_option("--threads", threads, "OpenMP threads (0: all)")->check(CLI::NonNegativeNumber);
+        app.add_option("--threads", threads, "OpenMP threads (0: all)")->check(CLI::Range(0, 1024));
         app.add_option("--smooth", smooth, "Taubin smoothing iterations (lambda 0.5, pass band 0.1; volume-preserving); 0: off")
             ->check(CLI::NonNegativeNumber);
         app.add_option("--decimate", decimate, "Quadric edge-collapse decimation to about this many triangles; 0: off")
@@ -79,7 +80,9 @@ int main(int argc, char** argv) {
           throw ctsurg::InputError(output, "suffix", "unknown output format '" + ext + "'; use .h5, .glb, .gltf, .obj, .stl or .ply");
         }
         if (!std::isfinite(iso)) throw ctsurg::InputError("--iso", "", "must be a finite number");
-        ctsurg::check_output_path(out_path);
+        ctsurg::check_output_paths(h5 ? std::vector<fs::path>{out_path, ctsurg::xdmf_path_for(out_path)}
+                                      : ctsurg::surface_export_files(out_path, false),
+                                   {fs::path(input)});
         Field field = read_field(input);
         if (field.quantity == "HU" && !*iso_opt) {
           throw ctsurg::InputError("--iso", "", input + " is an HU volume: give the isovalue in HU, e.g. --iso 150");
@@ -122,7 +125,9 @@ int main(int argc, char** argv) {
           provenance.add_input(input);
           ctsurg::write_surface_mesh_file(out_path, mesh, provenance);
         } else {
-          ctsurg::PendingSurfaceExport(out_path, mesh).commit();
+          ctsurg::OutputUnit outputs;
+          ctsurg::add_surface_export(outputs, out_path, mesh);
+          outputs.commit();
         }
         spdlog::info("wrote {} in {:.2f} s", output,
                      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());

@@ -9,6 +9,7 @@
 #include "ctsurg/core/tet_mesh_file.h"
 #include "ctsurg/core/tool_app.h"
 #include "ctsurg/core/version.h"
+#include "ctsurg/core/xdmf_sidecar.h"
 #include "ctsurg/mesh/tet_mesh_export.h"
 #include "ctsurg/mesh/tetrahedral_meshing.h"
 
@@ -108,7 +109,9 @@ int main(int argc, char** argv) {
         options.optimiser = optimiser == "odt"     ? ctsurg::TetOptimiser::odt
                             : optimiser == "lloyd" ? ctsurg::TetOptimiser::lloyd
                                                    : ctsurg::TetOptimiser::none;
-        ctsurg::check_output_path(out_path);
+        ctsurg::check_output_paths(h5 ? std::vector<fs::path>{out_path, ctsurg::xdmf_path_for(out_path)}
+                                      : std::vector<fs::path>{out_path},
+                                   {fs::path(input)});
         const ctsurg::OccupancyGrid grid = ctsurg::read_occupancy_grid_file(input);
         const ctsurg::Volume<uint16_t>& lattice = source == "grid" ? grid.label : grid.mask;
         const std::string dataset = source == "grid" ? "/grid/label" : "/mask";

@@ -13,53 +13,6 @@ namespace fs = std::filesystem;
 
 namespace ctsurg {
 
-std::vector<fs::path> detached_data_files(const fs::path& header) {
-  const ImageFileFormat format = image_file_format(header);
-  if (format == ImageFileFormat::Nifti) return {};
-  const bool nrrd = format == ImageFileFormat::Nrrd;
-  std::ifstream in(header);
-  std::string line;
-  std::vector<fs::path> files;
-  const fs::path base = header.parent_path();
-  bool list = false;
-  while (std::getline(in, line)) {
-    if (!line.empty() && line.back() == '\r') line.pop_back();
-    if (list) {
-      if (!line.empty()) files.push_back(base / line);
-      continue;
-    }
-    if (line.empty()) {
-      if (nrrd) break;  // end of a NRRD header
-      continue;
-    }
-    const auto sep = line.find(nrrd ? ':' : '=');
-    if (sep == std::string::npos) continue;
-    std::string key = line.substr(0, sep);
-    while (!key.empty() && key.back() == ' ') key.pop_back();
-    if (nrrd ? (key != "data file" && key != "datafile") : key != "ElementDataFile") continue;
-    std::istringstream value(line.substr(sep + 1));
-    std::string first;
-    value >> first;
-    if (first == "LIST") {
-      list = true;
-      continue;
-    }
-    if (first == "LOCAL") break;
-    long lo = 0, hi = 0, step = 0;
-    if (value >> lo >> hi >> step && step != 0) {
-      for (long n = lo; step > 0 ? n <= hi : n >= hi; n += step) {
-        char name[4096];
-        std::snprintf(name, sizeof name, first.c_str(), n);
-        files.push_back(base / name);
-      }
-    } else {
-      files.push_back(base / first);
-    }
-    if (!nrrd) break;  // ElementDataFile is the last MetaImage header field
-  }
-  return files;
-}
-
 CtImport import_ct(const fs::path& input, const CtImportOptions& options) {
   CtImport out;
   if (!fs::exists(input)) throw InputError(input.string(), "", "does not exist");
@@ -74,7 +27,7 @@ CtImport import_ct(const fs::path& input, const CtImportOptions& options) {
     out.files = std::move(d.files);
     out.warnings = std::move(d.warnings);
   } else {
-    out.volume.hu = read_image_file(input, &out.warnings);
+    out.volume.hu = read_image_file(input, &out.warnings, {options.data_files_anywhere});
     const ImageFileFormat format = image_file_format(input);
     out.volume.source = {{"format", format == ImageFileFormat::Nifti  ? "nifti"
                                     : format == ImageFileFormat::Nrrd ? "nrrd"
@@ -87,7 +40,18 @@ CtImport import_ct(const fs::path& input, const CtImportOptions& options) {
     if (options.rescale_slope || options.rescale_intercept) {
       const double slope = options.rescale_slope.value_or(1.0), intercept = options.rescale_intercept.value_or(0.0);
       if (!std::isfinite(slope) || slope == 0.0) throw InputError(input.string(), "--rescale-slope", "must be finite and non-zero");
-      for (float& v : out.volume.hu.voxels) v = static_cast<float>(v * slope + intercept);
+      if (!std::isfinite(intercept)) throw InputError(input.string(), "--rescale-intercept", "must be finite");
+      for (float& v : out.volume.hu.voxels) {
+        const double hu = v * slope + intercept;
+        // Beyond float range the volume would hold infinities; a CT spans a few thousand HU.
+        if (!(std::abs(hu) <= 1e6)) {
+          std::ostringstream m;
+          m << "gives " << hu << " HU for the stored value " << v << " (slope " << slope << ", intercept " << intercept
+            << "): outside +-1e6 HU, not a CT";
+          throw InputError(input.string(), "--rescale-slope/--rescale-intercept", m.str());
+        }
+        v = static_cast<float>(hu);
+      }
       out.volume.source["rescale"] = {{"slope", slope}, {"intercept", intercept}};
     }
   }

@@ -11,14 +11,20 @@
 #include "ctsurg/preprocess/dicom_series_reader.h"
 
 #include "ctsurg/core/error.h"
+#include "ctsurg/core/isolated_call.h"
+#include "ctsurg/core/library_messages.h"
 #include "ctsurg/core/memory_guard.h"
 #include "ctsurg/core/progress_bar.h"
+#include "ctsurg/preprocess/dicom_file_check.h"
 #include "ctsurg/preprocess/slice_stack.h"
 
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <cstring>
+#include <memory>
 #include <fstream>
 #include <map>
 #include <sstream>
@@ -32,7 +38,8 @@ namespace {
 const gdcm::Tag kSeriesUid(0x0020, 0x000e), kSeriesNumber(0x0020, 0x0011), kDescription(0x0008, 0x103e),
     kModality(0x0008, 0x0060), kImageType(0x0008, 0x0008), kPosition(0x0020, 0x0032), kOrientation(0x0020, 0x0037),
     kRows(0x0028, 0x0010), kColumns(0x0028, 0x0011), kPixelSpacing(0x0028, 0x0030), kFrames(0x0028, 0x0008),
-    kTransferSyntax(0x0002, 0x0010), kPixelData(0x7fe0, 0x0010);
+    kTransferSyntax(0x0002, 0x0010), kPixelData(0x7fe0, 0x0010), kSamplesPerPixel(0x0028, 0x0002),
+    kBitsAllocated(0x0028, 0x0100);
 
 std::string trim(std::string s) {
   while (!s.empty() && (s.back() == ' ' || s.back() == '\0')) s.pop_back();
@@ -76,6 +83,7 @@ struct SliceHeader {
   fs::path file;
   Eigen::Vector3d position, row_dir, col_dir;
   int rows = 0, columns = 0;
+  int bits_allocated = 16, samples_per_pixel = 1;
   double row_spacing = 0, column_spacing = 0;
 };
 
@@ -105,9 +113,21 @@ SliceHeader slice_header(const gdcm::Scanner& scan, const fs::path& file) {
     m << "spacing must be positive, got " << spacing[0] << "\\" << spacing[1];
     throw InputError(file.string(), "PixelSpacing (0028,0030)", m.str());
   }
+  if (!(rows[0] >= 1 && rows[0] <= 65535 && cols[0] >= 1 && cols[0] <= 65535)) {
+    throw InputError(file.string(), "Rows/Columns", "must be whole numbers 1 .. 65535 (US, PS3.5 6.2)");
+  }
   h.rows = static_cast<int>(rows[0]);
   h.columns = static_cast<int>(cols[0]);
-  if (h.rows < 1 || h.columns < 1) throw InputError(file.string(), "Rows/Columns", "image has no pixels");
+  const auto bits = parse_numbers(scan.GetValue(name, kBitsAllocated), 1, file, "BitsAllocated (0028,0100)");
+  if (bits[0] != 8 && bits[0] != 16 && bits[0] != 32) {
+    throw InputError(file.string(), "BitsAllocated (0028,0100)", "must be 8, 16 or 32 for a CT image");
+  }
+  h.bits_allocated = static_cast<int>(bits[0]);
+  if (const char* samples = scan.GetValue(name, kSamplesPerPixel)) {
+    if (parse_numbers(samples, 1, file, "SamplesPerPixel (0028,0002)")[0] != 1) {
+      throw InputError(file.string(), "SamplesPerPixel (0028,0002)", "must be 1: a CT image is greyscale");
+    }
+  }
   return h;
 }
 
@@ -146,20 +166,37 @@ void check_pixel_data_complete(const SliceHeader& h) {
                      "truncated file: pixel data needs " + std::to_string(length) + " bytes, the file holds " +
                          std::to_string(bytes.size() > start ? bytes.size() - start : 0));
   }
+  // Native pixel data hold Rows x Columns x BitsAllocated / 8 bytes (PS3.5 8.1.1); a header whose
+  // BitsAllocated claims more would make the decoder read past the element.
+  const uint64_t needed = uint64_t(h.rows) * uint64_t(h.columns) * uint64_t(h.samples_per_pixel) *
+                          uint64_t(h.bits_allocated) / 8;
+  if (length < needed) {
+    throw InputError(h.file.string(), "BitsAllocated (0028,0100)",
+                     "Rows x Columns x BitsAllocated / 8 = " + std::to_string(h.rows) + " x " + std::to_string(h.columns) +
+                         " x " + std::to_string(h.bits_allocated) + " / 8 = " + std::to_string(needed) +
+                         " bytes, but PixelData (7FE0,0010) holds " + std::to_string(length));
+  }
 }
 
 // Reads one slice file as float HU (ITK applies RescaleSlope/Intercept).
-std::vector<float> read_slice(const SliceHeader& h) {
+std::vector<float> read_slice(const SliceHeader& h, std::vector<std::string>* warnings) {
   check_pixel_data_complete(h);
   using Image = itk::Image<float, 3>;
   auto io = itk::GDCMImageIO::New();
   auto reader = itk::ImageFileReader<Image>::New();
   reader->SetImageIO(io);
   reader->SetFileName(h.file.string());
-  try {
-    reader->Update();
-  } catch (const itk::ExceptionObject& e) {
-    throw InputError(h.file.string(), "PixelData (7FE0,0010)", std::string("cannot decode: ") + e.GetDescription());
+  {
+    LibraryMessages said;
+    try {
+      reader->Update();
+    } catch (const itk::ExceptionObject& e) {
+      throw InputError(h.file.string(), "PixelData (7FE0,0010)",
+                       with_library_text(std::string("cannot decode: ") + e.GetDescription(), said.take()));
+    }
+    if (const std::string text = said.take(); !text.empty() && warnings) {
+      warnings->push_back(h.file.string() + ": the DICOM decoder said: " + text);
+    }
   }
   const Image* image = reader->GetOutput();
   const auto size = image->GetLargestPossibleRegion().GetSize();
@@ -186,6 +223,8 @@ std::vector<DicomSeriesInfo> scan_dicom_folder(const fs::path& folder, std::vect
   std::sort(names.begin(), names.end());
   if (names.empty()) throw InputError(folder.string(), "", "folder is empty: no DICOM files");
 
+  // GDCM allocates what an element's length declares before reading it: lengths are checked first.
+  for (const auto& name : names) check_dicom_element_lengths(name);
   gdcm::Scanner scan;
   for (const auto& t : {kSeriesUid, kSeriesNumber, kDescription, kModality, kImageType, kPosition, kOrientation,
                         kRows, kColumns, kPixelSpacing, kFrames})
@@ -249,7 +288,10 @@ std::vector<DicomSeriesInfo> scan_dicom_folder(const fs::path& folder, std::vect
   return out;
 }
 
-DicomVolume read_dicom_series(const fs::path& folder, const DicomReadOptions& options) {
+namespace {
+
+// The reading itself (in the child process of read_dicom_series); progress(done, total) per slice.
+DicomVolume read_series(const fs::path& folder, const DicomReadOptions& options, const ProgressReport& progress) {
   std::vector<std::string> skipped;
   const auto all = scan_dicom_folder(folder, &skipped);
   for (const auto& s : skipped) spdlog::debug("skipped {}", s);
@@ -280,7 +322,8 @@ DicomVolume read_dicom_series(const fs::path& folder, const DicomReadOptions& op
 
   // Re-scan the chosen series for geometry (cheap: headers only).
   gdcm::Scanner scan;
-  for (const auto& t : {kPosition, kOrientation, kRows, kColumns, kPixelSpacing, kFrames}) scan.AddTag(t);
+  for (const auto& t : {kPosition, kOrientation, kRows, kColumns, kPixelSpacing, kFrames, kBitsAllocated, kSamplesPerPixel})
+    scan.AddTag(t);
   std::vector<std::string> names;
   for (const auto& f : chosen->files) names.push_back(f.string());
   scan.Scan(names);
@@ -340,10 +383,9 @@ DicomVolume read_dicom_series(const fs::path& folder, const DicomReadOptions& op
   Volume<float> slices(geometry);
   const std::size_t plane = std::size_t(ref.rows) * std::size_t(ref.columns);
   {
-    ProgressBar progress("reading DICOM slices", headers.size());
     for (std::size_t k = 0; k < headers.size(); ++k) {
       const SliceHeader& h = headers[static_cast<std::size_t>(stack.order[k])];
-      const auto values = read_slice(h);
+      const auto values = read_slice(h, &out.warnings);
       for (std::size_t p = 0; p < plane; ++p) {
         if (!std::isfinite(values[p])) {
           throw InputError(h.file.string(), "PixelData (7FE0,0010)",
@@ -353,7 +395,7 @@ DicomVolume read_dicom_series(const fs::path& folder, const DicomReadOptions& op
       }
       std::copy(values.begin(), values.end(), slices.voxels.begin() + static_cast<std::ptrdiff_t>(k * plane));
       out.files.push_back(h.file);
-      progress.advance();
+      progress(k + 1, headers.size());
     }
   }
 
@@ -382,6 +424,65 @@ DicomVolume read_dicom_series(const fs::path& folder, const DicomReadOptions& op
   }
   out.hu = std::move(slices);
   return out;
+}
+
+// A DicomVolume as bytes: a JSON line (geometry, source, warnings, files), then the voxels.
+std::string serialised(const DicomVolume& v) {
+  const ImageGeometry& g = v.hu.geometry;
+  nlohmann::json head;
+  head["dims"] = g.dims;
+  head["spacing"] = {g.spacing[0], g.spacing[1], g.spacing[2]};
+  head["origin"] = {g.origin[0], g.origin[1], g.origin[2]};
+  head["direction"] = nlohmann::json::array();
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) head["direction"].push_back(g.direction(r, c));
+  head["source"] = v.source;
+  head["warnings"] = v.warnings;
+  head["files"] = nlohmann::json::array();
+  for (const auto& f : v.files) head["files"].push_back(f.string());
+  return head.dump() + "\n" +
+         std::string(reinterpret_cast<const char*>(v.hu.voxels.data()), v.hu.voxels.size() * sizeof(float));
+}
+
+DicomVolume deserialised(const std::string& bytes) {
+  const auto newline = bytes.find('\n');
+  const nlohmann::json head = nlohmann::json::parse(bytes.substr(0, newline));
+  DicomVolume v;
+  ImageGeometry g;
+  g.dims = head.at("dims").get<std::array<int64_t, 3>>();
+  for (int a = 0; a < 3; ++a) {
+    g.spacing[a] = head.at("spacing")[static_cast<std::size_t>(a)];
+    g.origin[a] = head.at("origin")[static_cast<std::size_t>(a)];
+  }
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) g.direction(r, c) = head.at("direction")[static_cast<std::size_t>(3 * r + c)];
+  v.hu.geometry = g;
+  const std::size_t count = static_cast<std::size_t>(g.voxel_count());
+  if (bytes.size() - newline - 1 != count * sizeof(float)) throw RuntimeError("DICOM reading: the volume came back incomplete");
+  v.hu.voxels.resize(count);
+  std::memcpy(v.hu.voxels.data(), bytes.data() + newline + 1, count * sizeof(float));
+  v.source = head.at("source");
+  v.warnings = head.at("warnings").get<std::vector<std::string>>();
+  for (const auto& f : head.at("files")) v.files.emplace_back(f.get<std::string>());
+  return v;
+}
+
+}  // namespace
+
+DicomVolume read_dicom_series(const fs::path& folder, const DicomReadOptions& options) {
+  // GDCM and ITK's decoders assert and allocate on damaged files in ways no check can foresee, so the
+  // folder is read in a child process (isolated_call.h): a crash there refuses the folder.
+  std::unique_ptr<ProgressBar> bar;
+  const std::string bytes = isolated_call(
+      folder.string(),
+      [&](const ProgressReport& progress) { return serialised(read_series(folder, options, progress)); },
+      [&](uint64_t done, uint64_t total) {
+        if (!bar) bar = std::make_unique<ProgressBar>("reading DICOM slices", total);
+        bar->advance(1);
+        (void)done;
+      });
+  bar.reset();
+  return deserialised(bytes);
 }
 
 }  // namespace ctsurg

@@ -12,7 +12,12 @@
 #include "ctsurg/preprocess/image_file_reader.h"
 
 #include "ctsurg/core/error.h"
+#include "ctsurg/core/input_file.h"
+#include "ctsurg/core/library_messages.h"
 #include "ctsurg/core/memory_guard.h"
+#include "ctsurg/preprocess/detached_data_files.h"
+#include "ctsurg/preprocess/metaimage_verification.h"
+#include "ctsurg/preprocess/nifti_verification.h"
 
 #include <unistd.h>
 
@@ -34,9 +39,31 @@ using detail::lower_case;
 using detail::make_image_io;
 
 void check_file(const fs::path& path) {
-  if (!fs::exists(path)) throw InputError(path.string(), "", "file does not exist");
   if (fs::is_directory(path)) throw InputError(path.string(), "", "is a folder; a DICOM series folder is read by ctsurg-import");
-  if (fs::file_size(path) == 0) throw InputError(path.string(), "", "file is empty");
+  check_input_file(path);
+}
+
+// `text` with every mention of the temporary copy `readable` replaced by the user's file `path`.
+std::string as_user_sees_it(std::string text, const fs::path& readable, const fs::path& path) {
+  if (readable == path) return text;
+  const std::string from = readable.string(), to = path.string();
+  for (std::size_t at = text.find(from); at != std::string::npos; at = text.find(from, at + to.size())) {
+    text.replace(at, from.size(), to);
+  }
+  return text;
+}
+
+// Verifies what ITK would take on trust (see image_file_reader.h): the file itself for NIfTI and
+// MetaImage, where the detached data files lie for MetaImage and NRRD.
+void verify_before_itk(const fs::path& path, ImageFileFormat format, const ImageReadOptions& options,
+                       std::vector<std::string>* warnings) {
+  if (format == ImageFileFormat::Nifti) {
+    verify_nifti_file(path, warnings);
+  } else if (format == ImageFileFormat::MetaImage) {
+    verify_metaimage_file(path, options.data_files_anywhere, warnings);
+  } else if (!options.data_files_anywhere) {
+    for (const auto& name : detached_data_file_names(path)) check_data_file_beside_header(path, name, "data file");
+  }
 }
 
 ImageGeometry geometry_from(const itk::ImageIOBase& io, const fs::path& path) {
@@ -144,16 +171,24 @@ class RepairedNrrdHeader {
   fs::path path_;
 };
 
-ImageFileInfo read_info_from(const fs::path& readable, const fs::path& path, ImageFileFormat format) {
+ImageFileInfo read_info_from(const fs::path& readable, const fs::path& path, ImageFileFormat format,
+                             std::vector<std::string>* warnings) {
   auto io = make_image_io(format);
+  LibraryMessages said;
   if (!io->CanReadFile(readable.c_str())) {
-    throw InputError(path.string(), "header", "not a readable " + lower_case(io->GetNameOfClass()) + " file (corrupt header?)");
+    throw InputError(path.string(), "header",
+                     with_library_text("not a readable " + lower_case(io->GetNameOfClass()) + " file (corrupt header?)",
+                                       as_user_sees_it(said.take(), readable, path)));
   }
   io->SetFileName(readable.string());
   try {
     io->ReadImageInformation();
   } catch (const itk::ExceptionObject& e) {
-    throw InputError(path.string(), "header", itk_reason(e));
+    const std::string text = as_user_sees_it(said.take(), readable, path);
+    throw InputError(path.string(), "header", with_library_text(as_user_sees_it(itk_reason(e), readable, path), text));
+  }
+  if (const std::string text = as_user_sees_it(said.take(), readable, path); !text.empty() && warnings) {
+    warnings->push_back("the image library said: " + text);
   }
   if (io->GetNumberOfComponents() != 1) {
     throw InputError(path.string(), "components",
@@ -177,34 +212,47 @@ ImageFileFormat image_file_format(const fs::path& path) {
                    "unknown image format; expected .nii, .nii.gz, .nrrd, .nhdr, .mha, .mhd or a DICOM folder");
 }
 
-ImageFileInfo read_image_file_info(const fs::path& path, std::vector<std::string>* warnings) {
+ImageFileInfo read_image_file_info(const fs::path& path, std::vector<std::string>* warnings,
+                                   const ImageReadOptions& options) {
   const ImageFileFormat format = image_file_format(path);
   check_file(path);
+  verify_before_itk(path, format, options, warnings);
   if (format == ImageFileFormat::Nrrd) {
     const RepairedNrrdHeader repaired(path, warnings);
-    if (!repaired.path().empty()) return read_info_from(repaired.path(), path, format);
+    if (!repaired.path().empty()) return read_info_from(repaired.path(), path, format, warnings);
   }
-  return read_info_from(path, path, format);
+  return read_info_from(path, path, format, warnings);
 }
 
-Volume<float> read_image_file(const fs::path& path, std::vector<std::string>* warnings) {
+Volume<float> read_image_file(const fs::path& path, std::vector<std::string>* warnings, const ImageReadOptions& options) {
   const ImageFileFormat format = image_file_format(path);
   check_file(path);
   const RepairedNrrdHeader repaired(format == ImageFileFormat::Nrrd ? path : fs::path(), nullptr);
   const fs::path readable = repaired.path().empty() ? path : repaired.path();
-  const ImageFileInfo info = read_image_file_info(path, warnings);
+  const ImageFileInfo info = read_image_file_info(path, warnings, options);
   const int64_t count = info.geometry.voxel_count();
-  // The reader holds the file's own type and our float copy at the same time.
-  check_allocation(static_cast<uint64_t>(count), sizeof(float) * 2, path.string(), "dimensions");
+  // While reading, the file's own buffer (up to 8 bytes a voxel for float64/int64), ITK's float
+  // image and our float copy are held at once.
+  check_allocation(static_cast<uint64_t>(count), 8 + 2 * sizeof(float), path.string(), "dimensions");
 
   using Image = itk::Image<float, 3>;
   auto reader = itk::ImageFileReader<Image>::New();
   reader->SetImageIO(make_image_io(format));
   reader->SetFileName(readable.string());
-  try {
-    reader->Update();
-  } catch (const itk::ExceptionObject& e) {
-    throw InputError(path.string(), "voxel data", itk_reason(e));
+  {
+    LibraryMessages said;
+    try {
+      reader->Update();
+    } catch (const itk::MemoryAllocationError&) {
+      const std::string cap = memory_cap_note();
+      throw RuntimeError(path.string() + ": voxel data: out of memory while reading" + (cap.empty() ? "" : " (" + cap + ")"));
+    } catch (const itk::ExceptionObject& e) {
+      const std::string text = as_user_sees_it(said.take(), readable, path);
+      throw InputError(path.string(), "voxel data", with_library_text(as_user_sees_it(itk_reason(e), readable, path), text));
+    }
+    if (const std::string text = as_user_sees_it(said.take(), readable, path); !text.empty() && warnings) {
+      warnings->push_back("the image library said: " + text);
+    }
   }
   const Image* image = reader->GetOutput();
   Volume<float> v;

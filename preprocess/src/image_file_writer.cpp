@@ -13,8 +13,8 @@
 
 #include "ctsurg/core/atomic_output.h"
 #include "ctsurg/core/error.h"
-
-#include <unistd.h>
+#include "ctsurg/core/library_messages.h"
+#include "ctsurg/preprocess/image_file_reader.h"
 
 #include <algorithm>
 #include <cctype>
@@ -56,8 +56,28 @@ WritableFormat writable_format(const fs::path& path) {
   throw InputError(path.string(), "file name", "unknown image format; expected .nii, .nii.gz, .nrrd or .mha");
 }
 
+// ITK's writers lose write errors (a full disk gave a truncated .nii.gz that looked finished), so
+// the file is read back through the verifying reader and compared with what was meant.
 template <class T>
-void write_typed(const Volume<T>& volume, const fs::path& path) {
+void verify_written(const fs::path& written, const Volume<T>& volume, const fs::path& path) {
+  Volume<float> back;
+  try {
+    back = read_image_file(written);
+  } catch (const InputError& e) {
+    throw RuntimeError(path.string() + ": the written file does not read back (" + e.field() + ": " + e.problem() + ")");
+  }
+  if (!back.geometry.same_lattice(volume.geometry, 1e-3) || back.voxels.size() != volume.voxels.size()) {
+    throw RuntimeError(path.string() + ": the written file does not read back with the volume's geometry");
+  }
+  for (std::size_t n = 0; n < back.voxels.size(); ++n) {
+    if (back.voxels[n] != static_cast<float>(volume.voxels[n])) {
+      throw RuntimeError(path.string() + ": the written file reads back a different value at voxel " + std::to_string(n));
+    }
+  }
+}
+
+template <class T>
+void write_typed(const Volume<T>& volume, const fs::path& path, OutputUnit* unit) {
   const WritableFormat format = writable_format(path);
   const ImageGeometry& g = volume.geometry;
   g.validate(path.string());
@@ -90,35 +110,46 @@ void write_typed(const Volume<T>& volume, const fs::path& path) {
                               false);
   image->SetPixelContainer(container);
 
-  AtomicOutput out(path);  // its temporary name keeps the suffix that ITK picks the format from
+  OutputUnit own;
+  // Its temporary name keeps the suffix that ITK picks the format from.
+  AtomicOutput& out = (unit ? *unit : own).add(path);
   auto writer = itk::ImageFileWriter<Image>::New();
   writer->SetImageIO(format.io);
   writer->SetFileName(out.temp_path().string());
   writer->SetInput(image);
-  try {
-    writer->Update();
-  } catch (const itk::ExceptionObject& e) {
-    throw RuntimeError(path.string() + ": cannot write image: " + itk_reason(e));
+  {
+    LibraryMessages said;
+    try {
+      writer->Update();
+    } catch (const itk::ExceptionObject& e) {
+      throw RuntimeError(path.string() + ": cannot write image: " + with_library_text(itk_reason(e), said.take()));
+    }
+    if (const std::string text = said.take(); !text.empty()) {
+      throw RuntimeError(path.string() + ": " + with_library_text("the image library reported a problem while writing", text));
+    }
   }
-  out.commit();
+  verify_written(out.temp_path(), volume, path);
+  if (!unit) own.commit();
 }
 
 }  // namespace
 
 void check_image_output_path(const fs::path& path) {
   writable_format(path);
-  if (fs::is_directory(path)) throw InputError(path.string(), "output", "is a folder, expected a file path");
-  fs::path parent = path.parent_path();
-  if (parent.empty()) parent = ".";
-  if (!fs::is_directory(parent)) throw InputError(path.string(), "output", "folder '" + parent.string() + "' does not exist");
-  if (::access(parent.c_str(), W_OK) != 0) {
-    throw InputError(path.string(), "output", "folder '" + parent.string() + "' is not writable");
-  }
+  check_output_path(path);
 }
 
-void write_image_file(const Volume<float>& volume, const fs::path& path) { write_typed(volume, path); }
-void write_image_file(const Volume<int16_t>& volume, const fs::path& path) { write_typed(volume, path); }
-void write_image_file(const Volume<uint8_t>& volume, const fs::path& path) { write_typed(volume, path); }
-void write_image_file(const Volume<uint16_t>& volume, const fs::path& path) { write_typed(volume, path); }
+void write_image_file(const Volume<float>& volume, const fs::path& path, OutputUnit* unit) {
+  write_typed(volume, path, unit);
+}
+void write_image_file(const Volume<int16_t>& volume, const fs::path& path, OutputUnit* unit) {
+  write_typed(volume, path, unit);
+}
+void write_image_file(const Volume<uint8_t>& volume, const fs::path& path, OutputUnit* unit) {
+  write_typed(volume, path, unit);
+}
+void write_image_file(const Volume<uint16_t>& volume, const fs::path& path, OutputUnit* unit) {
+  write_typed(volume, path, unit);
+}
 
 }  // namespace ctsurg

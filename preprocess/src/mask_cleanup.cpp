@@ -9,6 +9,7 @@
 #include "ctsurg/preprocess/mask_cleanup.h"
 
 #include "ctsurg/core/error.h"
+#include "ctsurg/core/memory_guard.h"
 #include "ctsurg/preprocess/tissue_selection.h"
 
 #include <spdlog/spdlog.h>
@@ -77,6 +78,27 @@ BinaryImage::Pointer fill_binary(BinaryImage::Pointer image) {
   return fill->GetOutput();
 }
 
+// A closing radius beyond the volume closes nothing more, and its ball and the padded copies the
+// filter makes (SetSafeBorder pads by the radius) grow with its cube: refused before ITK allocates.
+void check_closing_radius(const ImageGeometry& g, double radius_mm) {
+  if (!std::isfinite(radius_mm)) throw InputError("--closing-mm", "", "must be a finite number of mm");
+  uint64_t padded = 1, ball = 1;
+  for (int a = 0; a < 3; ++a) {
+    const double r = std::round(radius_mm / g.spacing[a]);
+    if (r > static_cast<double>(g.dims[a])) {
+      throw InputError("--closing-mm", "",
+                       "a radius of " + std::to_string(radius_mm) + " mm is " + std::to_string(static_cast<int64_t>(r)) +
+                           " voxels along axis " + std::to_string(a) + ", more than the volume's " +
+                           std::to_string(g.dims[a]) + " voxels; use at most " +
+                           std::to_string(static_cast<double>(g.dims[a]) * g.spacing[a]) + " mm");
+    }
+    padded *= static_cast<uint64_t>(g.dims[a]) + 2 * static_cast<uint64_t>(r);
+    ball *= 2 * static_cast<uint64_t>(r) + 1;
+  }
+  // Dilation and erosion each hold a padded input and output (uint8) besides the ball.
+  check_allocation(4 * padded + ball, 1, "--closing-mm", "closing");
+}
+
 }  // namespace
 
 Volume<uint16_t> cleanup_mask(const Volume<uint16_t>& mask, const MaskCleanupOptions& options) {
@@ -84,6 +106,7 @@ Volume<uint16_t> cleanup_mask(const Volume<uint16_t>& mask, const MaskCleanupOpt
   const auto labels = labels_present(mask);
 
   if (options.closing_mm > 0.0) {
+    check_closing_radius(mask.geometry, options.closing_mm);
     for (int a = 0; a < 3; ++a) {
       if (std::lround(options.closing_mm / mask.geometry.spacing[a]) == 0) {
         spdlog::warn("closing radius {} mm is under half the voxel spacing {} mm along axis {}: no closing along it",

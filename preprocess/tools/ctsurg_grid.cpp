@@ -1,12 +1,14 @@
 // ctsurg-grid CT.h5 [MASK] OUTPUT.h5: tissue selection, clean-up and downsampling of a CT to the
 // occupancy grid of the spring-mass model (ctsurg HDF5 + XDMF sidecar) and a PNG preview montage.
 #include "ctsurg/core/atomic_output.h"
+#include "ctsurg/core/checked_write.h"
 #include "ctsurg/core/error.h"
 #include "ctsurg/core/hu_volume_file.h"
 #include "ctsurg/core/occupancy_grid_file.h"
 #include "ctsurg/core/provenance.h"
 #include "ctsurg/core/tool_app.h"
 #include "ctsurg/core/version.h"
+#include "ctsurg/core/xdmf_sidecar.h"
 #include "ctsurg/preprocess/image_file_reader.h"
 #include "ctsurg/preprocess/label_resampling.h"
 #include "ctsurg/preprocess/mask_cleanup.h"
@@ -138,8 +140,13 @@ int main(int argc, char** argv) {
         grid_options.keep_largest_only = cleanup.keep_largest;
         grid_options.min_component_mm3 = cleanup.min_component_mm3;
         if (preview_path.empty()) preview_path = (output.parent_path() / (output.stem().string() + "_preview.png")).string();
-        ctsurg::check_output_path(output);
-        if (!no_preview) ctsurg::check_output_path(preview_path);
+        {
+          std::vector<fs::path> outputs{output, ctsurg::xdmf_path_for(output)};
+          if (!no_preview) outputs.emplace_back(preview_path);
+          std::vector<fs::path> inputs{ct_path};
+          if (by_mask) inputs.push_back(mask_path);
+          ctsurg::check_output_paths(outputs, inputs);
+        }
 
         const ctsurg::HuVolume ct = ctsurg::read_hu_volume_file(ct_path);
         const auto& g = ct.hu.geometry;
@@ -218,12 +225,16 @@ int main(int argc, char** argv) {
         ctsurg::Provenance provenance{ctx.name, ctsurg::kVersion, ctx.command_line, {}, nlohmann::json::array()};
         provenance.add_input(ct_path);
         if (by_mask) provenance.add_input(mask_path);
-        ctsurg::write_occupancy_grid_file(output, grid, provenance);
-        spdlog::info("wrote {}", output.string());
+        // The grid, its sidecar and the preview are one result, committed together: a failed
+        // preview leaves the previous grid in place.
+        ctsurg::OutputUnit outputs;
         if (!no_preview) {
-          ctsurg::write_file_atomically(preview_path, png);
-          spdlog::info("wrote {}", preview_path);
+          ctsurg::AtomicOutput& preview = outputs.add(preview_path);
+          ctsurg::write_file_checked(preview.temp_path(), png, preview_path);
         }
+        ctsurg::write_occupancy_grid_file(output, grid, provenance, &outputs);
+        outputs.commit();
+        spdlog::info("wrote {}{}", output.string(), no_preview ? std::string() : " and " + preview_path);
         spdlog::info("done in {:.2f} s",
                      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
       });

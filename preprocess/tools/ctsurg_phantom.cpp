@@ -1,6 +1,7 @@
 // ctsurg-phantom KIND OUTPUT: a synthetic CT of a shape with known analytic volume and area
 // (synthetic_phantom.h), written as NIfTI/NRRD/MetaImage with a JSON sidecar of the true values.
 #include "ctsurg/core/atomic_output.h"
+#include "ctsurg/core/checked_write.h"
 #include "ctsurg/core/error.h"
 #include "ctsurg/core/tool_app.h"
 #include "ctsurg/core/version.h"
@@ -146,6 +147,7 @@ int main(int argc, char** argv) {
           if (fs::absolute(label_out).lexically_normal() == fs::absolute(image_path).lexically_normal()) {
             throw ctsurg::InputError(kTool, "--label-out", "must differ from OUTPUT");
           }
+          ctsurg::check_output_paths({image_path, label_out, json_path}, {});
         }
 
         const ctsurg::PhantomRaster raster = ctsurg::rasterise_phantom(shape, options, kTool);
@@ -200,9 +202,13 @@ int main(int argc, char** argv) {
         j["rasterised_volume_mm3"] = raster.fraction_volume_mm3;
         j["rasterised_volume_relative_error"] = (raster.fraction_volume_mm3 - volume) / volume;
 
-        ctsurg::write_image_file(raster.hu, image_path);
-        if (!label_out.empty()) ctsurg::write_image_file(raster.label, label_out);
-        ctsurg::write_file_atomically(json_path, j.dump(2) + "\n");
+        // The CT, its mask and the sidecar are one result: committed together or not at all.
+        ctsurg::OutputUnit outputs;
+        ctsurg::write_image_file(raster.hu, image_path, &outputs);
+        if (!label_out.empty()) ctsurg::write_image_file(raster.label, label_out, &outputs);
+        ctsurg::AtomicOutput& sidecar = outputs.add(json_path);
+        ctsurg::write_file_checked(sidecar.temp_path(), j.dump(2) + "\n", json_path.string());
+        outputs.commit();
         spdlog::info("{}: {} {} x {} x {} voxels; analytic volume {:.6g} mm^3, rasterised {:.6g} mm^3 ({:+.3g}%), area {:.6g} mm^2",
                      output, ctsurg::phantom_kind_name(shape.kind), g.dims[0], g.dims[1], g.dims[2], volume,
                      raster.fraction_volume_mm3, 100.0 * (raster.fraction_volume_mm3 - volume) / volume, area);

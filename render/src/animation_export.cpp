@@ -4,10 +4,10 @@
 
 #include <cstdio>
 #include <cstdlib>
-#include <fstream>
 #include <unistd.h>
 
 #include "ctsurg/core/atomic_output.h"
+#include "ctsurg/core/checked_write.h"
 #include "ctsurg/core/error.h"
 
 namespace fs = std::filesystem;
@@ -56,7 +56,7 @@ void check_animation_output(const fs::path& path) {
   check_output_path(path);
 }
 
-void write_animation(const fs::path& path, const std::vector<RgbImage>& frames, double frames_per_second) {
+void write_animation(const fs::path& path, const std::vector<RgbImage>& frames, double frames_per_second, OutputUnit* unit) {
   check_animation_output(path);
   if (frames.empty()) throw InputError(path.string(), "frames", "no frames to animate");
   const std::string encoder = animation_encoder(path);
@@ -73,9 +73,11 @@ void write_animation(const fs::path& path, const std::vector<RgbImage>& frames, 
     char name[32];
     std::snprintf(name, sizeof name, "f%05zu.png", i);
     const std::vector<uint8_t> png = encode_png(frames[i]);
-    std::ofstream(folder / name, std::ios::binary).write(reinterpret_cast<const char*>(png.data()), std::streamsize(png.size()));
+    write_file_checked(folder / name, std::string_view(reinterpret_cast<const char*>(png.data()), png.size()),
+                       (folder / name).string());
   }
-  AtomicOutput out(path);
+  OutputUnit own;
+  AtomicOutput& out = (unit ? *unit : own).add(path);
   std::string cmd;
   const std::string fps = std::to_string(frames_per_second);
   if (encoder == "ffmpeg" && lower_suffix(path) == ".mp4") {
@@ -91,7 +93,7 @@ void write_animation(const fs::path& path, const std::vector<RgbImage>& frames, 
   }
   spdlog::debug("animation: {}", cmd);
   if (std::system(cmd.c_str()) != 0) throw RuntimeError(path.string() + ": the encoder (" + encoder + ") failed");
-  out.commit();
+  if (!unit) own.commit();
 }
 
 }  // namespace ctsurg

@@ -4,13 +4,13 @@
 #include <spdlog/spdlog.h>
 
 #include <chrono>
-#include <fstream>
-#include <memory>
 #include <optional>
 
 #include "ctsurg/core/atomic_output.h"
+#include "ctsurg/core/checked_write.h"
 #include "ctsurg/core/ctsurg_file.h"
 #include "ctsurg/core/error.h"
+#include "ctsurg/core/file_hash.h"
 #include "ctsurg/core/surface_mesh_file.h"
 #include "ctsurg/core/tool_app.h"
 #include "ctsurg/core/trajectory_file.h"
@@ -31,6 +31,21 @@ std::string lower_suffix(const fs::path& p) {
 fs::path output_name(const std::string& pattern, const std::string& tag) {
   const auto at = pattern.find("{}");
   return at == std::string::npos ? fs::path(pattern) : fs::path(pattern.substr(0, at) + tag + pattern.substr(at + 2));
+}
+
+// A trajectory records the SHA-256 of the surface it was simulated on (docs/formats.md): drawn on
+// another surface, its vertices would move the wrong triangles.
+void check_same_surface(const ctsurg::Trajectory& trajectory, const std::string& trajectory_path,
+                        const std::string& surface_path) {
+  if (trajectory.surface_sha256.empty()) return;  // simulated without a surface: the particles are drawn
+  const std::string sha = ctsurg::sha256_file(surface_path);
+  if (sha != trajectory.surface_sha256) {
+    throw ctsurg::InputError(trajectory_path, "/trajectory@surface_sha256",
+                             "the trajectory was simulated on a surface with SHA-256 " +
+                                 trajectory.surface_sha256.substr(0, 12) + "... ('" + trajectory.surface_file + "'), but " +
+                                 surface_path + " has " + sha.substr(0, 12) +
+                                 "...: render it with the surface the scenario used");
+  }
 }
 
 }  // namespace
@@ -133,6 +148,7 @@ int main(int argc, char** argv) {
         if (!trajectory_path.empty()) trajectory = ctsurg::read_trajectory_file(trajectory_path);
         ctsurg::RenderModel model{&surface, surface_path, trajectory ? &*trajectory : nullptr, trajectory_path};
         if (trajectory) {
+          check_same_surface(*trajectory, trajectory_path, surface_path);
           ctsurg::check_trajectory_matches_surface(*trajectory, trajectory_path, surface, surface_path);
           request.frames = ctsurg::parse_frames(frames_spec.empty() ? "last" : frames_spec, trajectory->frame_count());
         } else if (!frames_spec.empty() && frames_spec != "rest") {
@@ -151,6 +167,7 @@ int main(int argc, char** argv) {
           const std::string format = ctsurg::ctsurg_file_format(reference);
           if (format == "trajectory") {
             reference_trajectory = ctsurg::read_trajectory_file(reference);
+            check_same_surface(*reference_trajectory, reference, surface_path);
             // Another run on the same surface (model B, or the GPU backend) unless its vertex count says otherwise.
             if (reference_trajectory->vertex_count() != surface.vertex_count()) {
               throw ctsurg::InputError(reference, "/trajectory/surface/rest_vertices",
@@ -172,24 +189,31 @@ int main(int argc, char** argv) {
         if (expected > 1 && output.find("{}") == std::string::npos) {
           throw ctsurg::InputError(output, "name", std::to_string(expected) + " pictures: the output name needs {} for the frame number");
         }
-        ctsurg::check_output_path(output_name(output, "x"));
+        {
+          std::vector<fs::path> outputs{output_name(output, "x")};
+          if (!animation.empty()) outputs.emplace_back(animation);
+          std::vector<fs::path> inputs{surface_path, trajectory_path};
+          if (reference != "rest") inputs.emplace_back(reference);
+          ctsurg::check_output_paths(outputs, inputs);  // pictures are .png, inputs .h5: a pattern cannot hit one
+        }
 
-        // Render; each picture goes to a temporary file, all are renamed into place at the end.
-        std::vector<std::unique_ptr<ctsurg::AtomicOutput>> outputs;
+        // Render; each picture goes to a temporary file, all (and the animation) are committed together.
+        ctsurg::OutputUnit outputs;
         std::vector<ctsurg::RgbImage> animation_frames;
+        std::vector<fs::path> written;
         ctsurg::render_pictures(model, request, [&](ctsurg::Picture&& picture) {
           const std::vector<uint8_t> png = ctsurg::encode_png(picture.image);
-          auto out = std::make_unique<ctsurg::AtomicOutput>(output_name(output, picture.tag));
-          std::ofstream file(out->temp_path(), std::ios::binary);
-          file.write(reinterpret_cast<const char*>(png.data()), static_cast<std::streamsize>(png.size()));
-          if (!file) throw ctsurg::RuntimeError(out->path().string() + ": write failed");
-          outputs.push_back(std::move(out));
+          ctsurg::AtomicOutput& out = outputs.add(output_name(output, picture.tag));
+          ctsurg::write_file_checked(out.temp_path(),
+                                     std::string_view(reinterpret_cast<const char*>(png.data()), png.size()),
+                                     out.path().string());
+          written.push_back(out.path());
           if (!animation.empty()) animation_frames.push_back(std::move(picture.image));
         });
-        if (!animation.empty()) ctsurg::write_animation(animation, animation_frames, fps);
-        for (auto& out : outputs) out->commit();
-        spdlog::info("wrote {} picture{} ({}{}) in {:.2f} s", outputs.size(), outputs.size() == 1 ? "" : "s",
-                     outputs.size() == 1 ? outputs.front()->path().string() : output,
+        if (!animation.empty()) ctsurg::write_animation(animation, animation_frames, fps, &outputs);
+        outputs.commit();
+        spdlog::info("wrote {} picture{} ({}{}) in {:.2f} s", written.size(), written.size() == 1 ? "" : "s",
+                     written.size() == 1 ? written.front().string() : output,
                      animation.empty() ? "" : ", " + animation,
                      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
       });

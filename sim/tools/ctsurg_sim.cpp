@@ -3,12 +3,14 @@
 // probe, cut and force tools) and writes the trajectory: the surface at each output frame, per-frame
 // metrics and the tools, as an HDF5 file with an XDMF sidecar for ParaView. See docs/sim.md and
 // data_samples/scenarios/.
+#include "ctsurg/core/atomic_output.h"
 #include "ctsurg/core/error.h"
 #include "ctsurg/core/progress_bar.h"
 #include "ctsurg/core/provenance.h"
 #include "ctsurg/core/tool_app.h"
 #include "ctsurg/core/trajectory_file.h"
 #include "ctsurg/core/version.h"
+#include "ctsurg/core/xdmf_sidecar.h"
 #include "ctsurg/sim/scenario/scenario.h"
 #include "ctsurg/sim/scenario/scenario_model.h"
 #include "ctsurg/sim/scenario/scenario_run.h"
@@ -23,7 +25,9 @@ namespace fs = std::filesystem;
 int main(int argc, char** argv) {
   std::string scenario_path, output, grid, surface, tetmesh, backend;
   int threads = -1;
-  bool describe = false;
+  bool describe = false, force = false;
+  // Longer runs ask for --force: an hour of this machine, estimated from the run's first second.
+  constexpr double kMaxWallS = 3600;
   return ctsurg::run_tool(
       argc, argv, "ctsurg-sim",
       "Runs a scenario file (YAML or JSON): a model of the tissue (spring-mass on the implicit 18-neighbour grid "
@@ -42,6 +46,8 @@ int main(int argc, char** argv) {
                      "Print what the scenario reads and writes (model, input files, trajectory, render requests) as JSON "
                      "and exit without running; for the pipeline (scripts/Makefile)");
         app.add_option("--threads", threads, "CPU threads, 0 = automatic (overrides threads)")->check(CLI::Range(0, 1024));
+        app.add_flag("--force", force,
+                     "Run even when the run is estimated (from its first second) to take more than an hour");
       },
       [&](const ctsurg::ToolContext& ctx) {
         ctsurg::sim::Scenario s = ctsurg::sim::read_scenario_file(scenario_path);
@@ -58,17 +64,28 @@ int main(int argc, char** argv) {
         if (s.trajectory.extension() != ".h5") {
           throw ctsurg::InputError(s.trajectory.string(), "output.trajectory", "the trajectory is an HDF5 file: name it *.h5");
         }
+        // The output is checked before simulating, so a bad path costs nothing.
+        const ctsurg::sim::ModelInputs read = ctsurg::sim::model_inputs(s);
+        std::vector<fs::path> inputs{scenario_path};
+        if (read.grid) inputs.push_back(s.grid);
+        if (read.surface) inputs.push_back(s.surface);
+        if (read.tetmesh) inputs.push_back(s.tetmesh);
+        ctsurg::check_output_paths({s.trajectory, ctsurg::xdmf_path_for(s.trajectory)}, inputs);
         spdlog::info("sim: scenario '{}' ({}), {} s, {} tool(s)", s.name, ctsurg::sim::to_string(s.model), s.duration_s,
                      s.tools.size());
         std::unique_ptr<ctsurg::ProgressBar> bar;
         ctsurg::sim::RunReport report;
         uint64_t shown = 0;
-        const ctsurg::Trajectory traj = ctsurg::sim::run_scenario(s, &report, [&](double fraction) {
-          if (!bar) bar = std::make_unique<ctsurg::ProgressBar>("simulating", 1000);
-          const uint64_t now = static_cast<uint64_t>(fraction * 1000);
-          if (now > shown) bar->advance(now - shown);
-          shown = std::max(shown, now);
-        });
+        const ctsurg::sim::RunBudget budget{force ? 0.0 : kMaxWallS};
+        const ctsurg::Trajectory traj = ctsurg::sim::run_scenario(
+            s, &report,
+            [&](double fraction) {
+              if (!bar) bar = std::make_unique<ctsurg::ProgressBar>("simulating", 1000);
+              const uint64_t now = static_cast<uint64_t>(fraction * 1000);
+              if (now > shown) bar->advance(now - shown);
+              shown = std::max(shown, now);
+            },
+            budget);
         bar.reset();
         for (const auto& note : report.notes) spdlog::info("sim: {}", note);
         const double rate = report.wall_s > 0 ? report.steps / report.wall_s : 0.0;
@@ -89,7 +106,6 @@ int main(int argc, char** argv) {
         }
         ctsurg::Provenance provenance{ctx.name, ctsurg::kVersion, ctx.command_line, {}, nlohmann::json::array()};
         provenance.add_input(scenario_path);
-        const ctsurg::sim::ModelInputs read = ctsurg::sim::model_inputs(s);
         if (read.grid) provenance.add_input(s.grid);
         if (read.surface) provenance.add_input(s.surface);
         if (read.tetmesh) provenance.add_input(s.tetmesh);

@@ -207,6 +207,13 @@ TEST(CtsurgGrid, BadInputExitsTwoNamesTheProblemAndWritesNothing) {
       {"bad threshold", {ct.string(), out, "--otsu", "--occupancy-threshold", "0"}, "--occupancy-threshold"},
       {"missing CT", {(dir / "nope.h5").string(), out, "--otsu"}, "nope.h5"},
       {"components too small", {ct.string(), out, "--otsu", "--min-component-mm3", "1e9"}, "--min-component-mm3"},
+      // Issue 17: a closing radius of 1e6 mm grew past 2.6 GB with no memory guard.
+      {"absurd closing", {ct.string(), out, "--otsu", "--closing-mm", "1e6"}, "--closing-mm"},
+      // Issue 17: outputs that are inputs replaced them.
+      {"output is the CT", {ct.string(), ct.string(), "--otsu"}, "is the input"},
+      {"output is the mask", {ct.string(), labels.string(), labels.string()}, "is the input"},
+      {"preview is the grid", {ct.string(), out, "--otsu", "--preview", out}, "is also the output"},
+      {"preview is the CT", {ct.string(), out, "--otsu", "--preview", ct.string()}, "is the input"},
   };
   for (const auto& c : cases) {
     const auto r = run_tool("ctsurg-grid", c.args);
@@ -258,3 +265,29 @@ TEST(CtsurgGridRealData, KidneysWithNames) {
 }
 
 }  // namespace
+
+// Issue 17: the grid was committed before its preview was written, so a failed preview exited 1
+// with the previous grid already replaced. The grid, its sidecar and the preview are one unit: a
+// preview that cannot be written (a file-size limit between the grid's size and the preview's,
+// SIGXFSZ ignored) leaves every previous output as it was.
+TEST(CtsurgGrid, AFailedPreviewKeepsThePreviousGrid) {
+  TempDir dir;
+  const fs::path ct = write_ct(dir);
+  const std::vector<std::string> args{ct.string(), (dir / "g.h5").string(), "--otsu", "--voxel-mm", "6"};
+  ASSERT_EQ(run_tool("ctsurg-grid", args).exit_code, 0);
+  const std::string grid = read_bytes(dir / "g.h5"), xdmf = read_bytes(dir / "g.xdmf"), png = read_bytes(dir / "g_preview.png");
+  ASSERT_GT(png.size(), grid.size() + 4096) << "the test needs a preview larger than the grid";
+  std::string command = "trap '' XFSZ; ulimit -f " + std::to_string((grid.size() + png.size()) / 2 / 1024) +
+                        "; CTSURG_NO_PROGRESS=1 " + std::string(CTSURG_TOOL_DIR) + "/ctsurg-grid";
+  // Another grid (5 mm cells), so a replaced file would show.
+  for (const auto& a : {ct.string(), (dir / "g.h5").string(), std::string("--otsu"), std::string("--voxel-mm"),
+                        std::string("5")}) {
+    command += " " + a;
+  }
+  const auto r = ctsurg::test::run_shell(command);
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("g_preview.png"), std::string::npos) << r.output;
+  EXPECT_TRUE(read_bytes(dir / "g.h5") == grid) << "the previous grid was replaced";
+  EXPECT_TRUE(read_bytes(dir / "g.xdmf") == xdmf);
+  EXPECT_TRUE(read_bytes(dir / "g_preview.png") == png);
+}

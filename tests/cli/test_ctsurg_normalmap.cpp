@@ -205,6 +205,35 @@ TEST(CtsurgNormalmap, BadInputExitsTwoAndLeavesNoFile) {
   expect_bad({(dir / "done.h5").string(), grid, out, "--png", png}, "already has a texture atlas");
   expect_bad({s, grid, (dir / "no_such_folder" / "o.h5").string()}, "no_such_folder");
   expect_bad({s, grid, out, "--size", "64", "--padding", "9"}, "--padding");
+  // Issue 17: --sigma-mm 1e9 and --threads 1000000 crashed; outputs that are inputs replaced them;
+  // a surface and a field that do not overlap were accepted.
+  expect_bad({s, grid, out, "--sigma-mm", "1e9"}, "--sigma-mm");
+  expect_bad({s, grid, out, "--threads", "1000000"}, "--threads");
+  expect_bad({s, grid, s}, "is the input");
+  expect_bad({s, grid, grid}, "is the input");
+  v.hu.geometry.origin = Eigen::Vector3d(500.0, 500.0, 500.0);
+  ctsurg::write_hu_volume_file(dir / "far.h5", v, test_provenance());
+  expect_bad({s, (dir / "far.h5").string(), out, "--iso", "0"}, "lies entirely outside this field");
+}
+
+// Issue 17: a corrupted HDF5 surface crashed libhdf5 in normalmap (and sim, render). Bytes flipped
+// across the file: every run is refused (exit 2) or, where a byte is unused, succeeds; none crashes.
+TEST(CtsurgNormalmap, ACorruptedSurfaceFileIsRefusedNeverCrashes) {
+  TempDir dir;
+  const Outputs in = prepare(dir);
+  const std::string bytes = read_bytes(in.surface);
+  int refused = 0;
+  for (int n = 1; n <= 12; ++n) {
+    std::string bad = bytes;
+    const std::size_t at = bytes.size() * static_cast<std::size_t>(n) / 13;
+    for (std::size_t b = at; b < std::min(bytes.size(), at + 8); ++b) bad[b] = static_cast<char>(~bad[b]);
+    { std::ofstream(dir / "bad.h5", std::ios::binary) << bad; }
+    const auto r = run_tool("ctsurg-normalmap", {(dir / "bad.h5").string(), in.grid.string(), (dir / "o.h5").string(),
+                                                 "--size", "64"});
+    EXPECT_TRUE(r.exit_code == 2 || r.exit_code == 0) << "bytes " << at << "..: exit " << r.exit_code << "\n" << r.output;
+    refused += r.exit_code == 2;
+  }
+  EXPECT_GE(refused, 10);
 }
 
 }  // namespace

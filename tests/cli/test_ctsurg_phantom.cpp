@@ -115,6 +115,7 @@ TEST(CtsurgPhantom, BadInputExitsTwoAndWritesNothing) {
   struct Case {
     std::vector<std::string> args;
     std::string mentions;
+    int exit_code = 2;
   };
   const std::vector<Case> cases = {
       {{"sphere", "OUT", "--radius-mm", "0"}, "--radius-mm"},
@@ -127,7 +128,7 @@ TEST(CtsurgPhantom, BadInputExitsTwoAndWritesNothing) {
       {{"cube", "OUT"}, "cube"},
       {{"sphere", "OUT", "--spacing-mm", "0"}, "--spacing-mm"},
       {{"sphere", "OUT", "--spacing-mm", "1,-1,1"}, "--spacing-mm"},
-      {{"sphere", "OUT", "--spacing-mm", "0.002"}, "--spacing-mm"},  // ~10^13 voxels: too big for memory
+      {{"sphere", "OUT", "--spacing-mm", "0.002"}, "--spacing-mm", 1},  // ~10^13 voxels: out of memory (exit 1)
       {{"sphere", "OUT", "--supersample", "0"}, "--supersample"},
       {{"sphere", "DIR/ct.png"}, "ct.png"},
       {{"sphere", "DIR/missing/ct.nii.gz"}, "does not exist"},
@@ -143,7 +144,7 @@ TEST(CtsurgPhantom, BadInputExitsTwoAndWritesNothing) {
       args.push_back(a);
     }
     const auto r = run_tool("ctsurg-phantom", args);
-    EXPECT_EQ(r.exit_code, 2) << c.args[0] << " " << c.mentions << "\n" << r.output;
+    EXPECT_EQ(r.exit_code, c.exit_code) << c.args[0] << " " << c.mentions << "\n" << r.output;
     EXPECT_NE(r.output.find(c.mentions), std::string::npos) << r.output;
     EXPECT_TRUE(ctsurg::test::files_in(dir.path()).empty()) << c.mentions;
   }
@@ -177,3 +178,19 @@ TEST(CtsurgPhantom, RerunGivesIdenticalBytes) {
 }
 
 }  // namespace
+
+// Issue 17: on a full disk the phantom's .nii, .nii.gz and .mha were committed truncated with exit
+// 0 (ITK's writers lose write errors). The written image is read back before it is committed: here
+// a 2 KiB file-size limit gives exit 1 and the previous files stay as they were.
+TEST(CtsurgPhantom, AFullDiskKeepsThePreviousFiles) {
+  ctsurg::test::TempDir dir;
+  for (const char* name : {"ct.nii", "ct.nii.gz", "ct.mha"}) {
+    std::ofstream(dir / name) << "previous";
+    const auto r = ctsurg::test::run_shell("trap '' XFSZ; ulimit -f 2; CTSURG_NO_PROGRESS=1 " +
+                                           std::string(CTSURG_TOOL_DIR) + "/ctsurg-phantom sphere " +
+                                           (dir / name).string() + " --radius-mm 12 --spacing-mm 0.5");
+    EXPECT_EQ(r.exit_code, 1) << name << ": " << r.output;
+    EXPECT_EQ(ctsurg::test::read_bytes(dir / name), "previous") << name;
+  }
+  EXPECT_EQ(ctsurg::test::files_in(dir.path()).size(), 3u) << "temporary or sidecar files left behind";
+}

@@ -7,7 +7,9 @@
 #include "test_support.h"
 
 #include <gtest/gtest.h>
+#include <hdf5.h>
 
+#include <cmath>
 #include <fstream>
 
 namespace fs = std::filesystem;
@@ -92,6 +94,15 @@ TEST(CtsurgSim, BadInputIsExitTwoWithTheFieldNamedAndNothingWritten) {
       {scenario(), {"--grid", (dir.path() / "nothing.h5").string()}, "nothing.h5"},
       {scenario(), {"--backend", "cuda"}, "cuda"},
       {scenario(), {"-o", (dir.path() / "out" / "traj.vtk").string()}, "output.trajectory"},
+      // Issue 17: E = 1e300 gave "stability: dt: must be > 0", naming no field.
+      {scenario("  youngs_modulus_pa: 1e300\n"), {}, "s.yaml: material.youngs_modulus_pa: must be from 1 Pa to 1e11 Pa"},
+      // Issue 17: duration_s 1e9 or dt_s 1e-12 ran until killed.
+      {scenario("  preset: liver\n", "  dt_s: 1e-12\n"), {}, "time.dt_s: must be at least"},
+      {scenario("  preset: liver\n", "").replace(scenario().find("duration_s: 0.1"), 15, "duration_s: 1e9"), {},
+       "time.duration_s: must be at most"},
+      // Issue 17: an output that is an input replaced it.
+      {scenario(), {"-o", (dir.path() / "grid.h5").string()}, "is the input"},
+      {scenario(), {"-o", (dir.path() / "surface.h5").string()}, "is the input"},
   };
   for (const auto& c : cases) {
     write_text(dir.path() / "s.yaml", c.text);
@@ -117,4 +128,60 @@ TEST(CtsurgSim, UnstableRunStopsWithAStepToTryAndKeepsTheOldOutput) {
   EXPECT_NE(r.output.find("unstable"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("dt <="), std::string::npos) << r.output;
   EXPECT_EQ(read_bytes(out), "an earlier result");
+}
+
+// Issue 17: ctsurg-sim checked its output folder only after simulating (40 s lost on a read-only
+// folder). The output is checked before the run starts: the run's report never appears.
+TEST(CtsurgSim, TheOutputIsCheckedBeforeSimulating) {
+  TempDir dir;
+  write_inputs(dir.path());
+  write_text(dir.path() / "s.yaml", scenario());
+  for (const fs::path& out : {dir.path() / "absent" / "traj.h5", dir.path() / "s.yaml"}) {
+    const auto r = run_tool("ctsurg-sim", {(dir.path() / "s.yaml").string(), "-o", out.string()});
+    EXPECT_EQ(r.exit_code, 2) << r.output;
+    EXPECT_NE(r.output.find(out.string()), std::string::npos) << r.output;
+    EXPECT_EQ(r.output.find("steps in"), std::string::npos) << "it simulated first:\n" << r.output;
+  }
+}
+
+// Issue 17: a run that would take hours ran with no estimate. After its first second the run is
+// estimated; over an hour it asks for --force (exit 2, naming the estimate and the limit).
+TEST(CtsurgSim, ARunEstimatedToTakeTooLongAsksForForce) {
+  TempDir dir;
+  write_inputs(dir.path());
+  fs::create_directory(dir.path() / "out");
+  std::string text = scenario("  preset: liver\n", "  dt_s: 1e-6\n");
+  text.replace(text.find("duration_s: 0.1"), 15, "duration_s: 80000");
+  text.replace(text.find("frame_interval_s: 0.01"), 22, "frame_interval_s: 1000");
+  write_text(dir.path() / "s.yaml", text);
+  const auto r = run_tool("ctsurg-sim", {(dir.path() / "s.yaml").string()});
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("time.duration_s: this run would take about"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("--force"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(dir.path() / "out" / "traj.h5"));
+}
+
+// Issue 17: a NaN surface vertex gave a NaN trajectory (docs/sim.md promises never). The surface is
+// refused where it enters, naming the dataset.
+TEST(CtsurgSim, ANanSurfaceVertexIsRefusedWhereItEnters) {
+  TempDir dir;
+  write_inputs(dir.path());
+  fs::create_directory(dir.path() / "out");
+  {
+    const hid_t file = H5Fopen((dir.path() / "surface.h5").c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
+    const hid_t ds = H5Dopen2(file, "/surface/vertices", H5P_DEFAULT);
+    const hid_t space = H5Dget_space(ds);
+    std::vector<float> v(static_cast<std::size_t>(H5Sget_simple_extent_npoints(space)));
+    ASSERT_GE(H5Dread(ds, H5T_NATIVE_FLOAT, H5S_ALL, H5S_ALL, H5P_DEFAULT, v.data()), 0);
+    v[7] = std::nanf("");
+    ASSERT_GE(H5Dwrite(ds, H5T_NATIVE_FLOAT, H5S_ALL, H5S_ALL, H5P_DEFAULT, v.data()), 0);
+    H5Sclose(space);
+    H5Dclose(ds);
+    H5Fclose(file);
+  }
+  write_text(dir.path() / "s.yaml", scenario());
+  const auto r = run_tool("ctsurg-sim", {(dir.path() / "s.yaml").string()});
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("/surface/vertices: NaN at row 2, column 1"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(dir.path() / "out" / "traj.h5"));
 }

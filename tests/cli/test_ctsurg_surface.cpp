@@ -9,6 +9,7 @@
 #include "test_support.h"
 
 #include <gtest/gtest.h>
+#include <hdf5.h>
 
 #include <Eigen/Geometry>
 
@@ -222,6 +223,55 @@ TEST(CtsurgSurface, BadInputExitsTwoAndLeavesNoFile) {
   expect_bad({grid.string(), (dir / "s.h5").string(), "--iso", "nan"}, "--iso");
   expect_bad({grid.string(), (dir / "s.h5").string(), "--decimate", "2"}, "--decimate");
   expect_bad({grid.string(), (dir / "s.h5").string(), "--smooth", "-1"}, "--smooth");
+  // Issue 17: --threads 1000000 crashed; an output that is the input replaced it.
+  expect_bad({grid.string(), (dir / "s.h5").string(), "--threads", "1000000"}, "--threads");
+  expect_bad({grid.string(), grid.string()}, "is the input");
+}
+
+// Issue 17: NaN in a CT gave NaN surface vertices. A volume that holds NaN (written by another
+// program) is refused where it enters, naming the voxel.
+TEST(CtsurgSurface, ANanVoxelIsRefusedWhereItEnters) {
+  TempDir dir;
+  ctsurg::HuVolume v;
+  ctsurg::ImageGeometry g;
+  g.dims = {12, 12, 12};
+  v.hu = ctsurg::Volume<float>(g, -1000.5f);  // fractional: stored as float32, where NaN can be
+  for (int64_t k = 3; k < 9; ++k)
+    for (int64_t j = 3; j < 9; ++j)
+      for (int64_t i = 3; i < 9; ++i) v.hu(i, j, k) = 300.0f;
+  const fs::path ct = dir / "ct.h5";
+  ctsurg::write_hu_volume_file(ct, v, test_provenance());
+  {
+    const hid_t file = H5Fopen(ct.c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
+    const hid_t ds = H5Dopen2(file, "/hu/data", H5P_DEFAULT);
+    const hid_t space = H5Dget_space(ds);
+    std::vector<float> values(static_cast<std::size_t>(H5Sget_simple_extent_npoints(space)));
+    ASSERT_GE(H5Dread(ds, H5T_NATIVE_FLOAT, H5S_ALL, H5S_ALL, H5P_DEFAULT, values.data()), 0);
+    values[values.size() / 2] = std::nanf("");
+    ASSERT_GE(H5Dwrite(ds, H5T_NATIVE_FLOAT, H5S_ALL, H5S_ALL, H5P_DEFAULT, values.data()), 0);
+    H5Sclose(space);
+    H5Dclose(ds);
+    H5Fclose(file);
+  }
+  const auto r = run_tool("ctsurg-surface", {ct.string(), (dir / "s.h5").string(), "--iso", "0"});
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("/hu/data: NaN at voxel"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(dir / "s.h5"));
+}
+
+// Issue 17: on a full disk, .stl/.obj/.ply surfaces were committed truncated with exit 0, replacing
+// the previous file (Assimp's file I/O drops write errors). Here a 4 KiB file-size limit.
+TEST(CtsurgSurface, AFullDiskKeepsThePreviousMeshFile) {
+  TempDir dir;
+  const fs::path grid = write_grid(dir, "g.h5");
+  for (const char* name : {"s.stl", "s.obj", "s.ply", "s.glb", "s.gltf"}) {
+    std::ofstream(dir / name) << "previous";
+    const auto r = ctsurg::test::run_shell("trap '' XFSZ; ulimit -f 4; CTSURG_NO_PROGRESS=1 " + std::string(CTSURG_TOOL_DIR) +
+                                           "/ctsurg-surface " + grid.string() + " " + (dir / name).string());
+    EXPECT_EQ(r.exit_code, 1) << name << ": " << r.output;
+    EXPECT_EQ(ctsurg::test::read_bytes(dir / name), "previous") << name;
+  }
+  EXPECT_EQ(ctsurg::test::files_in(dir.path()).size(), 7u) << "temporary files left behind";  // + g.h5, g.xdmf
 }
 
 }  // namespace

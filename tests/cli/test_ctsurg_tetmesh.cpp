@@ -147,12 +147,15 @@ TEST(CtsurgTetmesh, BadInputExitsTwoAndLeavesNoFile) {
   expect_bad({grid.string(), (dir / "m.vtk").string()}, "unknown output format");
   expect_bad({(dir / "missing.h5").string(), out}, "missing.h5");
   expect_bad({grid.string(), (dir / "no_such_folder" / "m.h5").string()}, "no_such_folder");
-  // The memory guard: a fine mesh that cannot fit in the memory allowed.
+  // Issue 17: an output that is the input replaced it.
+  expect_bad({grid.string(), grid.string()}, "is the input");
+  // The memory guard: a fine mesh that cannot fit in the memory allowed is refused before meshing
+  // (exit 1: out of memory, docs/formats.md).
   const auto before = ctsurg::test::files_in(dir.path());
-  const auto r = ctsurg::test::run_shell("CTSURG_MAX_MEMORY_MB=20 " + std::string(CTSURG_TOOL_DIR) + "/ctsurg-tetmesh " +
-                                         grid.string() + " " + out + " --cell-size 0.3 --facet-size 0.3");
-  EXPECT_EQ(r.exit_code, 2) << r.output;
-  EXPECT_NE(r.output.find("--cell-size 0.3"), std::string::npos) << r.output;
+  const auto r = ctsurg::test::run_shell("CTSURG_MAX_MEMORY_MB=200 " + std::string(CTSURG_TOOL_DIR) + "/ctsurg-tetmesh " +
+                                         grid.string() + " " + out + " --cell-size 0.1 --facet-size 0.1 --max-cells 100000000");
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("--cell-size 0.1"), std::string::npos) << r.output;
   EXPECT_EQ(ctsurg::test::files_in(dir.path()), before);
 }
 

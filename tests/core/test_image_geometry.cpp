@@ -53,3 +53,35 @@ TEST(ImageGeometry, ValidateRejectsAbsurdGeometryWithTheField) {
   bad.origin[0] = std::nan("");
   EXPECT_THROW(bad.validate("f"), InputError);
 }
+
+// Issue 17: a MetaImage DimSize of 2^32 overflowed voxel_count() and an srow of -1.7e38 hung a later
+// stage. Geometry that is finite but not sane is refused by validate().
+TEST(ImageGeometry, InsaneGeometryIsRefused) {
+  ImageGeometry g;
+  g.dims = {4, 4, 4};
+  EXPECT_NO_THROW(g.validate("f"));
+  const auto refused = [](const ImageGeometry& bad, const std::string& field) {
+    try {
+      bad.validate("f");
+      ADD_FAILURE() << "accepted; expected a refusal naming " << field;
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.field(), field) << e.what();
+    }
+  };
+  ImageGeometry b = g;
+  b.dims = {int64_t{1} << 32, int64_t{1} << 32, 4};
+  b.spacing = Eigen::Vector3d(1e-3, 1e-3, 1.0);  // 4.3 km each way: only the count is wrong
+  refused(b, "dims");
+  b = g;
+  b.spacing[1] = 1.7e38;
+  refused(b, "spacing");
+  b.spacing[1] = 1e-9;
+  refused(b, "spacing");
+  b = g;
+  b.origin[2] = -1.7e38;
+  refused(b, "origin");
+  b = g;
+  b.spacing[0] = 9000;
+  b.dims[0] = 2000;  // 18 km long
+  refused(b, "origin");
+}

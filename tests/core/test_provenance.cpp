@@ -25,6 +25,7 @@ TEST(Provenance, RecordsInputsAndChainsUpstreamFiles) {
     auto f = h5::File::create(tmp / "a.h5");
     auto root = f.root();
     first.write(root);
+    f.close();
   }
   Provenance second{"ctsurg-grid", "1", {"ctsurg-grid", "a.h5", "b.h5"}, {}, nlohmann::json::array()};
   second.add_input(tmp / "a.h5");
@@ -32,6 +33,7 @@ TEST(Provenance, RecordsInputsAndChainsUpstreamFiles) {
     auto f = h5::File::create(tmp / "b.h5");
     auto root = f.root();
     second.write(root);
+    f.close();
   }
   const auto j = Provenance::read(h5::File::open(tmp / "b.h5").root());
   EXPECT_EQ(j["tool"], "ctsurg-grid");

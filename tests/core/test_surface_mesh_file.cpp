@@ -2,6 +2,10 @@
 // (8 and 16 bits), and the checks on read and write.
 #include <gtest/gtest.h>
 
+#include <hdf5.h>
+
+#include <cmath>
+
 #include "ctsurg/core/error.h"
 #include "ctsurg/core/surface_mesh_file.h"
 #include "test_support.h"
@@ -76,3 +80,31 @@ TEST(SurfaceMeshFile, RejectsInconsistentOptionalArrays) {
 }
 
 }  // namespace
+
+// Issue 17: a NaN surface vertex became a NaN trajectory. Non-finite vertices, normals, weights or
+// tangents are neither written nor read.
+TEST(SurfaceMeshFile, NonFiniteValuesAreNeitherWrittenNorRead) {
+  ctsurg::test::TempDir tmp;
+  ctsurg::SurfaceMesh m = textured(8);
+  m.vertices[4] = std::nanf("");
+  EXPECT_THROW(ctsurg::write_surface_mesh_file(tmp / "nan.h5", m, test_provenance()), ctsurg::InputError);
+  EXPECT_FALSE(std::filesystem::exists(tmp / "nan.h5"));
+  m.vertices[4] = 0.0f;
+  ctsurg::write_surface_mesh_file(tmp / "s.h5", m, test_provenance());
+  {  // another writer puts a NaN into /surface/normals (HDF5 recomputes its checksum)
+    const hid_t file = H5Fopen((tmp / "s.h5").c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
+    const hid_t ds = H5Dopen2(file, "/surface/normals", H5P_DEFAULT);
+    std::vector<float> normals = m.normals;
+    normals[7] = std::nanf("");
+    ASSERT_GE(H5Dwrite(ds, H5T_NATIVE_FLOAT, H5S_ALL, H5S_ALL, H5P_DEFAULT, normals.data()), 0);
+    H5Dclose(ds);
+    H5Fclose(file);
+  }
+  try {
+    ctsurg::read_surface_mesh_file(tmp / "s.h5");
+    ADD_FAILURE() << "a NaN normal was read";
+  } catch (const ctsurg::InputError& e) {
+    EXPECT_EQ(e.field(), "/surface/normals");
+    EXPECT_NE(e.problem().find("row 2, column 1"), std::string::npos) << e.what();
+  }
+}

@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <fstream>
 #include <sstream>
 
@@ -118,6 +119,7 @@ TEST(TetMeshFile, ReadRejectsOtherFilesAndBadShapes) {
   {
     auto f = ctsurg::h5::File::create(dir / "other.h5");
     f.root().set_attribute("ctsurg_format", std::string("surface_mesh"));
+    f.close();
   }
   EXPECT_THROW(ctsurg::read_tet_mesh_file(dir / "other.h5"), ctsurg::InputError);
   EXPECT_THROW(ctsurg::read_tet_mesh_file(dir / "missing.h5"), ctsurg::InputError);
@@ -133,6 +135,7 @@ TEST(TetMeshFile, ReadRejectsOtherFilesAndBadShapes) {
     const std::array<uint64_t, 2> n3{3, 3}, t3{1, 3};
     g.write_dataset("nodes", nodes, n3);
     g.write_dataset("tets", tets, t3);
+    f.close();
   }
   try {
     ctsurg::read_tet_mesh_file(dir / "bad.h5");
@@ -144,3 +147,17 @@ TEST(TetMeshFile, ReadRejectsOtherFilesAndBadShapes) {
 }
 
 }  // namespace
+
+// Issue 17: NaN never crosses a stage boundary: a tet mesh with a non-finite node is not written.
+TEST(TetMeshFile, NonFiniteNodesAreRefused) {
+  TempDir dir;
+  ctsurg::TetMesh m = two_tets();
+  m.nodes[4] = std::nan("");
+  try {
+    ctsurg::write_tet_mesh_file(dir / "m.h5", m, test_provenance());
+    ADD_FAILURE() << "a NaN node was written";
+  } catch (const ctsurg::InputError& e) {
+    EXPECT_EQ(e.field(), "/tetmesh/nodes");
+  }
+  EXPECT_FALSE(std::filesystem::exists(dir / "m.h5"));
+}

@@ -7,7 +7,9 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <fstream>
+#include <limits>
 #include <sstream>
 
 namespace fs = std::filesystem;
@@ -155,5 +157,19 @@ TEST(TrajectoryFile, OtherFilesAreRefusedByName) {
     ADD_FAILURE() << "read a text file as a trajectory";
   } catch (const ctsurg::InputError& e) {
     EXPECT_NE(std::string(e.what()).find("not.h5"), std::string::npos) << e.what();
+  }
+}
+
+// Issue 17: docs/sim.md promises that a trajectory never holds a non-finite value; the writer and
+// the reader check it.
+TEST(TrajectoryFile, NonFiniteValuesAreRefused) {
+  TempDir dir;
+  for (const int which : {0, 1, 2}) {
+    ctsurg::Trajectory t = three_frames(true);
+    if (which == 0) t.vertices[20] = std::nanf("");
+    if (which == 1) t.metrics[0].values[1] = std::numeric_limits<double>::infinity();
+    if (which == 2) t.particles[4] = std::nanf("");
+    EXPECT_THROW(ctsurg::write_trajectory_file(dir / "t.h5", t, test_provenance()), ctsurg::InputError) << which;
+    EXPECT_FALSE(fs::exists(dir / "t.h5"));
   }
 }

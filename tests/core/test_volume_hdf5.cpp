@@ -1,12 +1,15 @@
 #include "ctsurg/core/volume_hdf5.h"
 
 #include "ctsurg/core/error.h"
-#include "ctsurg/core/memory_guard.h"
+#include "ctsurg/core/hdf5_file.h"
 #include "ctsurg/core/xdmf_sidecar.h"
 #include "test_support.h"
 
 #include <Eigen/Geometry>
 #include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
 
 using namespace ctsurg;
 
@@ -23,6 +26,7 @@ TEST(VolumeHdf5, GeometryAndValuesRoundTripExactly) {
     auto f = h5::File::create(tmp / "v.h5");
     auto root = f.root();
     write_volume(root, "hu", v, {"HU", "HU"}, VoxelType::Int16);
+    f.close();
   }
   const auto f = h5::File::open(tmp / "v.h5");
   const auto back = read_volume<float>(f.root(), "hu");
@@ -50,8 +54,41 @@ TEST(XdmfSidecar, PointsIntoTheHdf5FileWithReversedDims) {
   EXPECT_EQ(xdmf_path_for("/a/b/ct.h5"), std::filesystem::path("/a/b/ct.xdmf"));
 }
 
-TEST(MemoryGuard, RefusesWhatCannotFit) {
-  EXPECT_NO_THROW(check_allocation(1000, 4, "f", "dims"));
-  EXPECT_THROW(check_allocation(uint64_t{1} << 62, 8, "f", "dims"), InputError);  // overflows 2^64
-  EXPECT_THROW(check_allocation(available_memory_bytes(), 2, "f", "dims"), InputError);
+// Issue 17: NaN never crosses a stage boundary. A float volume with NaN is not written, and one
+// that holds NaN (written by another program) is refused naming the voxel.
+TEST(VolumeHdf5, NonFiniteVoxelsAreNeitherWrittenNorRead) {
+  test::TempDir tmp;
+  ImageGeometry g;
+  g.dims = {4, 3, 2};
+  Volume<float> v(g, 1.0f);
+  v(2, 1, 1) = std::nanf("");
+  {
+    auto f = h5::File::create(tmp / "nan.h5");
+    auto root = f.root();
+    EXPECT_THROW(write_volume(root, "hu", v, {"HU", "HU"}, VoxelType::Float32), InputError);
+  }
+  v(2, 1, 1) = 1.0f;
+  {
+    auto f = h5::File::create(tmp / "v.h5");
+    auto root = f.root();
+    write_volume(root, "hu", v, {"HU", "HU"}, VoxelType::Float32);
+    f.close();
+  }
+  {  // another writer puts an infinity into the dataset (HDF5 recomputes its checksum)
+    const hid_t file = H5Fopen((tmp / "v.h5").c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
+    const hid_t ds = H5Dopen2(file, "/hu/data", H5P_DEFAULT);
+    std::vector<float> values(v.voxels);
+    values[static_cast<std::size_t>(g.flat_index(3, 2, 1))] = std::numeric_limits<float>::infinity();
+    ASSERT_GE(H5Dwrite(ds, H5T_NATIVE_FLOAT, H5S_ALL, H5S_ALL, H5P_DEFAULT, values.data()), 0);
+    H5Dclose(ds);
+    H5Fclose(file);
+  }
+  const auto f = h5::File::open(tmp / "v.h5");
+  try {
+    read_volume<float>(f.root(), "hu");
+    ADD_FAILURE() << "an infinite voxel was read";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.field(), "/hu/data");
+    EXPECT_NE(e.problem().find("(3, 2, 1)"), std::string::npos) << e.what();
+  }
 }

@@ -72,7 +72,7 @@ TEST(ImageFileReader, BadFilesAreInputErrorsNamingTheFileAndField) {
   expect_error(tmp / "missing.nii.gz", "");
   expect_error(tmp / "image.png", "file name");
   std::ofstream(tmp / "garbage.nii") << std::string(400, 'x');
-  expect_error(tmp / "garbage.nii", "header");
+  expect_error(tmp / "garbage.nii", "sizeof_hdr");
   std::vector<float> values(8, 1.0f);
   values[5] = std::nanf("");
   expect_error(test::write_mhd(tmp.path(), "nan", 2, 2, 2, values), "voxel data");
@@ -81,10 +81,24 @@ TEST(ImageFileReader, BadFilesAreInputErrorsNamingTheFileAndField) {
   values[5] = 0;
   expect_error(test::write_mhd(tmp.path(), "negative", 2, 2, 2, values, "1 -1 1"), "spacing");
   expect_error(test::write_mhd(tmp.path(), "zero", 2, 2, 2, values, "0 1 1"), "spacing");
-  // A header that promises far more voxels than memory holds: refused before allocating.
+  // A header that promises more voxels than an image has: bad input.
   const auto huge = tmp / "huge.mhd";
   test::write_mhd(tmp.path(), "huge", 2, 2, 2, values);
   std::ofstream(huge) << "ObjectType = Image\nNDims = 3\nDimSize = 100000 100000 100000\nElementSpacing = 1 1 1\n"
                          "ElementType = MET_FLOAT\nElementDataFile = huge.raw\n";
-  expect_error(huge, "dimensions");
+  expect_error(huge, "DimSize");
+  // A complete image (a sparse 100 GB data file) that does not fit in memory: refused before
+  // allocating, as a runtime failure (exit 1).
+  std::ofstream(tmp / "big.mhd") << "ObjectType = Image\nNDims = 3\nDimSize = 5000 5000 4000\nElementSpacing = 1 1 1\n"
+                                    "ElementType = MET_UCHAR\nElementDataFile = big.raw\n";
+  { std::ofstream(tmp / "big.raw"); }
+  fs::resize_file(tmp / "big.raw", uint64_t{100000000000});
+  try {
+    read_image_file(tmp / "big.mhd");
+    ADD_FAILURE() << "a 100 GB image was read";
+  } catch (const InputError& e) {
+    ADD_FAILURE() << "a memory refusal is a runtime failure: " << e.what();
+  } catch (const RuntimeError& e) {
+    EXPECT_NE(std::string(e.what()).find("refused before allocating"), std::string::npos) << e.what();
+  }
 }

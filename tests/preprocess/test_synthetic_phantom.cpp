@@ -264,10 +264,16 @@ TEST(SyntheticPhantom, InvalidParametersNameTheOption) {
   o.margin_mm = 4;
   o.hu_inside = o.hu_outside;
   EXPECT_EQ(field_of([&] { ctsurg::validate_phantom_raster_options(o, "t"); }), "--hu-inside");
-  // A lattice too big for memory is refused before allocating.
+  // A lattice too big for memory is refused before allocating: a runtime failure (exit 1) naming
+  // the option; one with more voxels than an image has is bad input.
   ctsurg::PhantomRasterOptions tiny;
   tiny.spacing_mm = Eigen::Vector3d::Constant(0.005);
-  EXPECT_EQ(field_of([&] { ctsurg::rasterise_phantom(sphere(20), tiny, "t"); }), "--spacing-mm");
+  try {
+    ctsurg::rasterise_phantom(sphere(20), tiny, "t");
+    ADD_FAILURE() << "a lattice of 10^12 voxels was allocated";
+  } catch (const ctsurg::RuntimeError& e) {
+    EXPECT_NE(std::string(e.what()).find("--spacing-mm"), std::string::npos) << e.what();
+  }
   tiny.spacing_mm = Eigen::Vector3d::Constant(1e-12);
   EXPECT_EQ(field_of([&] { ctsurg::rasterise_phantom(sphere(20), tiny, "t"); }), "--spacing-mm");
 }

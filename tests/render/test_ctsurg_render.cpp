@@ -3,6 +3,7 @@
 // nothing written).
 #include <gtest/gtest.h>
 
+#include "ctsurg/core/file_hash.h"
 #include "ctsurg/core/surface_mesh_file.h"
 #include "ctsurg/core/trajectory_file.h"
 #include "ctsurg/render/rgb_image.h"
@@ -121,4 +122,26 @@ TEST(CtsurgRender, MissingNormalMapWarnsAndNoGlContextIsExitTwo) {
   EXPECT_EQ(r.exit_code, 2) << r.output;
   EXPECT_NE(r.output.find("OpenGL"), std::string::npos) << r.output;
   EXPECT_FALSE(fs::exists(out / "q.png"));
+}
+
+// Issue 17: ctsurg-render never checked surface_sha256, although docs/formats.md says it does. A
+// trajectory simulated on one surface file is refused on another (here the same mesh written with
+// other provenance: other bytes), and drawn on its own.
+TEST(CtsurgRender, ATrajectoryIsDrawnOnlyOnTheSurfaceItWasSimulatedOn) {
+  Inputs in;
+  const ctsurg::SurfaceMesh s = ctsurg::test::bumpy_organ_surface(24, 12, 64);
+  ctsurg::Provenance other = ctsurg::test::test_provenance();
+  other.command_line.push_back("--another-run");
+  ctsurg::write_surface_mesh_file(in.dir / "copy.h5", s, other);
+  ctsurg::Trajectory t = ctsurg::test::three_frame_trajectory(s);
+  t.surface_sha256 = ctsurg::sha256_file(in.surface);
+  ctsurg::write_trajectory_file(in.dir / "t.h5", t, ctsurg::test::test_provenance());
+  const auto bad = run_tool("ctsurg-render", {"-s", (in.dir / "copy.h5").string(), "-t", (in.dir / "t.h5").string(), "-o",
+                                              (in.dir / "x.png").string(), "--size", "32"});
+  EXPECT_EQ(bad.exit_code, 2) << bad.output;
+  EXPECT_NE(bad.output.find("t.h5: /trajectory@surface_sha256"), std::string::npos) << bad.output;
+  EXPECT_FALSE(fs::exists(in.dir / "x.png"));
+  const auto good = run_tool("ctsurg-render", {"-s", in.surface.string(), "-t", (in.dir / "t.h5").string(), "-o",
+                                               (in.dir / "x.png").string(), "--size", "32"});
+  EXPECT_EQ(good.exit_code, 0) << good.output;
 }

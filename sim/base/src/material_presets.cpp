@@ -3,8 +3,19 @@
 #include "ctsurg/core/error.h"
 
 #include <cmath>
+#include <sstream>
 
 namespace ctsurg::sim {
+
+namespace {
+
+std::string number(double v) {
+  std::ostringstream s;
+  s << v;
+  return s.str();
+}
+
+}  // namespace
 
 const std::vector<Material>& material_presets() {
   // Densities: ICRU Report 46 (1992), adult heart, liver and kidney 1.05-1.06 g/cm^3. Moduli: small-
@@ -33,16 +44,22 @@ Material material_preset(const std::string& name, const std::string& file, const
 }
 
 void validate_material(const Material& m, const std::string& file) {
-  if (!(std::isfinite(m.youngs_modulus_pa) && m.youngs_modulus_pa > 0)) {
-    throw InputError(file, "material.youngs_modulus_pa", "must be finite and > 0 Pa, got " + std::to_string(m.youngs_modulus_pa));
+  // Bounds of what is a material at all, not of tissue: 1 Pa (softer than any gel) to 1e11 Pa
+  // (steel; cortical bone is about 2e10 Pa), 0.01 to 25 g/cm^3. Beyond them the critical time step
+  // underflows or overflows, and the run would fail later with a message about the step instead.
+  if (!(std::isfinite(m.youngs_modulus_pa) && m.youngs_modulus_pa >= kMinYoungsModulusPa &&
+        m.youngs_modulus_pa <= kMaxYoungsModulusPa)) {
+    throw InputError(file, "material.youngs_modulus_pa",
+                     "must be from 1 Pa to 1e11 Pa (soft tissue is 1e2 .. 1e6 Pa), got " + number(m.youngs_modulus_pa));
   }
   if (!(std::isfinite(m.poisson_ratio) && m.poisson_ratio > -1 && m.poisson_ratio < 0.5)) {
     throw InputError(file, "material.poisson_ratio",
                      "must be in (-1, 0.5) (0.5 is incompressible, which these models cannot represent), got " +
                          std::to_string(m.poisson_ratio));
   }
-  if (!(std::isfinite(m.density) && m.density > 0)) {
-    throw InputError(file, "material.density_g_per_cm3", "must be finite and > 0");
+  if (!(std::isfinite(m.density) && m.density >= 1e-5 && m.density <= 2.5e-2)) {
+    throw InputError(file, "material.density_g_per_cm3",
+                     "must be from 0.01 to 25 g/cm^3 (tissue is about 1.05), got " + number(m.density * 1e3));
   }
 }
 

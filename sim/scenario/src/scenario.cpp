@@ -1,6 +1,7 @@
 #include "ctsurg/sim/scenario/scenario.h"
 
 #include "ctsurg/core/error.h"
+#include "ctsurg/core/input_file.h"
 #include "ctsurg/sim/scenario/scenario_model.h"
 #include "yaml_field.h"
 
@@ -190,7 +191,7 @@ std::string describe_scenario(const Scenario& s) {
   return j.dump(2);
 }
 
-Scenario parse_scenario(const std::string& text, const fs::path& file, const fs::path& base_dir) {
+static Scenario parse_fields(const std::string& text, const fs::path& file, const fs::path& base_dir) {
   const std::string name = file.string();
   YAML::Node doc;
   try {
@@ -294,7 +295,13 @@ Scenario parse_scenario(const std::string& text, const fs::path& file, const fs:
 
   const YamlField t = top.child("time");
   t.only({"duration_s", "dt_s", "safety_factor", "max_step_halvings"});
+  // Bounds of a rehearsal, not of physics: at most a day of simulated time, steps of at least a
+  // nanosecond (the explicit models' critical steps are microseconds to milliseconds). How long a
+  // run within them takes on this machine is estimated when it starts (ctsurg-sim --force).
   s.duration_s = t.child("duration_s").positive();
+  if (s.duration_s > kMaxDurationS) {
+    t.child("duration_s").fail("must be at most " + YamlField::num(kMaxDurationS) + " s (a day of simulated time)");
+  }
   if (t.has("dt_s")) {
     const YamlField dt = t.child("dt_s");
     if (dt.is_scalar() && dt.text() == "auto") {
@@ -302,6 +309,7 @@ Scenario parse_scenario(const std::string& text, const fs::path& file, const fs:
     } else {
       s.dt_s = dt.positive();
       if (s.dt_s > s.duration_s) dt.fail("the step is longer than the run");
+      if (s.dt_s < kMinStepS) dt.fail("must be at least " + YamlField::num(kMinStepS) + " s");
     }
   }
   if (t.has("safety_factor")) {
@@ -321,6 +329,9 @@ Scenario parse_scenario(const std::string& text, const fs::path& file, const fs:
   s.trajectory = resolve(base_dir, o.child("trajectory").text());
   s.frame_interval_s = o.has("frame_interval_s") ? o.child("frame_interval_s").positive() : s.duration_s / 50;
   if (s.frame_interval_s > s.duration_s) o.child("frame_interval_s").fail("longer than the run");
+  if (s.duration_s / s.frame_interval_s > kMaxFrames) {
+    o.child("frame_interval_s").fail("gives more than " + YamlField::num(kMaxFrames) + " frames over time.duration_s");
+  }
   if (o.has("particles")) s.write_particles = o.child("particles").boolean();
   if (top.has("render")) {
     for (const auto& item : top.child("render").items()) {
@@ -352,7 +363,19 @@ Scenario parse_scenario(const std::string& text, const fs::path& file, const fs:
   return s;
 }
 
+Scenario parse_scenario(const std::string& text, const fs::path& file, const fs::path& base_dir) {
+  // The field checks read the document through yaml-cpp, which throws its own exceptions on shapes
+  // they did not foresee (found by tests/fuzz/fuzz_scenario.cpp); every one is bad input.
+  try {
+    return parse_fields(text, file, base_dir);
+  } catch (const YAML::Exception& e) {
+    throw InputError(file.string(), "line " + std::to_string(e.mark.line + 1), "not a valid scenario: " + e.msg);
+  }
+}
+
 Scenario read_scenario_file(const fs::path& path) {
+  check_input_file(path);
+  if (fs::file_size(path) > (1u << 20)) throw InputError(path.string(), "", "more than 1 MiB: not a scenario file");
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(path.string(), "(file)", "cannot be opened");
   std::ostringstream text;

@@ -8,14 +8,53 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
+#include <limits>
+#include <string>
 
 namespace ctsurg::sim {
 namespace {
 
 constexpr int64_t kGuardInterval = 1000;  // steps between stability checks (besides every frame)
 
+std::string duration_text(double seconds) {
+  char text[64];
+  if (seconds < 120) {
+    std::snprintf(text, sizeof text, "%.0f s", seconds);
+  } else if (seconds < 7200) {
+    std::snprintf(text, sizeof text, "%.0f min", seconds / 60);
+  } else if (seconds < 3 * 86400) {
+    std::snprintf(text, sizeof text, "%.1f h", seconds / 3600);
+  } else {
+    std::snprintf(text, sizeof text, "%.3g days", seconds / 86400);
+  }
+  return text;
+}
+
+// After budget.sample_s of running: the estimate of the whole run from its speed so far (true once
+// it was made; InputError when it exceeds the budget).
+bool check_budget(const Scenario& s, const SimulationEngine& engine, const RunBudget& budget,
+                  std::chrono::steady_clock::duration elapsed) {
+  const double wall = std::chrono::duration<double>(elapsed).count();
+  if (wall < budget.sample_s) return false;
+  const double simulated = engine.time();
+  const double estimate = simulated > 0 ? wall * s.duration_s / simulated : std::numeric_limits<double>::infinity();
+  if (estimate <= budget.max_wall_s) return true;
+  std::string steps;
+  if (!engine.quasi_static() && engine.dt() > 0) {
+    char text[96];
+    std::snprintf(text, sizeof text, " (%.3g steps of %.3g s)", s.duration_s / engine.dt(), engine.dt());
+    steps = text;
+  }
+  throw InputError(s.file.string(), "time.duration_s",
+                   "this run would take about " + duration_text(estimate) + " on this machine" + steps + ", judged by its first " +
+                       duration_text(wall) + "; the limit is " + duration_text(budget.max_wall_s) +
+                       ": shorten duration_s, coarsen the model or the step, or run it anyway with --force");
+}
+
 // The loop (scenario_run.h); report already holds the notes of the engine's construction.
-Trajectory run(const Scenario& s, ScenarioEngine built, RunReport& report, const std::function<void(double)>& progress) {
+Trajectory run(const Scenario& s, ScenarioEngine built, RunReport& report, const std::function<void(double)>& progress,
+               const RunBudget& budget) {
   if (!built.engine) throw RuntimeError(s.file.string() + ": no engine to run");
   const std::string sfile = s.file.string();
   const auto note = [&](const std::string& text) { report.notes.push_back(text); };
@@ -43,7 +82,12 @@ Trajectory run(const Scenario& s, ScenarioEngine built, RunReport& report, const
   double last_progress = -1;
   std::vector<ToolInput> tools;
   int64_t next_frame = 1;
+  bool estimated = budget.max_wall_s <= 0;
+  int64_t iterations = 0;
   while (next_frame < frame_count) {
+    if (!estimated && ++iterations % 16 == 0) {
+      estimated = check_budget(s, engine, budget, std::chrono::steady_clock::now() - start);
+    }
     // Advance to the next event: one step (several while no tool acts, for an engine that batches them),
     // or a quasi-static engine's equilibrium at the next frame.
     const double t_frame = static_cast<double>(next_frame) * s.frame_interval_s;
@@ -55,7 +99,7 @@ Trajectory run(const Scenario& s, ScenarioEngine built, RunReport& report, const
       const double t = engine.time(), dt = engine.dt(), t_next = t + dt;
       timeline.inputs(t, t_next, engine.blade_sweep_mm(), tools);
       const int steps = engine.batches_steps() && timeline.idle(t_next, t_frame)
-                            ? std::max(1, static_cast<int>(std::floor((t_frame - t) / dt + 0.5)))
+                            ? static_cast<int>(std::clamp(std::floor((t_frame - t) / dt + 0.5), 1.0, 1e6))
                             : 1;
       check = engine.step(tools, steps);
     }
@@ -111,19 +155,21 @@ Trajectory run(const Scenario& s, ScenarioEngine built, RunReport& report, const
 
 }  // namespace
 
-Trajectory run_scenario(const Scenario& s, RunReport* report_out, const std::function<void(double)>& progress) {
+Trajectory run_scenario(const Scenario& s, RunReport* report_out, const std::function<void(double)>& progress,
+                        const RunBudget& budget) {
   RunReport report;
   const auto t0 = std::chrono::steady_clock::now();
   ScenarioEngine engine = make_scenario_engine(s, [&](const std::string& text) { report.notes.push_back(text); });
   report.setup_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  Trajectory traj = run(s, std::move(engine), report, progress);
+  Trajectory traj = run(s, std::move(engine), report, progress, budget);
   if (report_out) *report_out = std::move(report);
   return traj;
 }
 
-Trajectory run_scenario(const Scenario& s, ScenarioEngine engine, RunReport* report_out, const std::function<void(double)>& progress) {
+Trajectory run_scenario(const Scenario& s, ScenarioEngine engine, RunReport* report_out,
+                        const std::function<void(double)>& progress, const RunBudget& budget) {
   RunReport report;
-  Trajectory traj = run(s, std::move(engine), report, progress);
+  Trajectory traj = run(s, std::move(engine), report, progress, budget);
   if (report_out) *report_out = std::move(report);
   return traj;
 }

@@ -34,7 +34,8 @@ void YamlField::only(std::initializer_list<const char*> known) const {
   if (!node_.IsMap()) fail("expected a map (key: value pairs)");
   const std::set<std::string> k(known.begin(), known.end());
   for (const auto& kv : node_) {
-    const std::string key = kv.first.as<std::string>();
+    if (!kv.first.IsScalar()) fail("a key is a list or a map; keys are plain names");
+    const std::string key = kv.first.Scalar();
     if (!k.count(key)) {
       std::string list;
       for (const auto& s : k) list += (list.empty() ? "" : ", ") + s;

@@ -89,11 +89,12 @@ __global__ void __launch_bounds__(kBlock) place_grabbed_kernel(Real* x, Real* y,
 // with no host staging buffer that a later call could overwrite before the copy ran.
 __global__ void set_centre_kernel(SphereView* centre, SphereView value) { *centre = value; }
 
-__global__ void __launch_bounds__(kBlock) inside_sphere_kernel(const Real* x, const Real* y, const Real* z,
-                                                               int32_t count, SphereView tool, uint8_t* inside) {
+__global__ void __launch_bounds__(kBlock) grabbable_kernel(const Real* x, const Real* y, const Real* z,
+                                                           const Real* inv_mass, int32_t count, SphereView tool,
+                                                           uint8_t* inside) {
   const int32_t i = static_cast<int32_t>(blockIdx.x * blockDim.x + threadIdx.x);
   if (i >= count) return;
-  inside[i] = inside_sphere(x[i], y[i], z[i], tool) ? 1 : 0;
+  inside[i] = grabbable(x, y, z, inv_mass, tool, i) ? 1 : 0;
 }
 
 // Offsets of the grabbed particles from the centre, as grab_particles_in_sphere computes them.
@@ -431,8 +432,8 @@ Grab DeviceSimulation::Impl::grab(const SphereView& tool, int* handle) {
   d.flags.resize(static_cast<std::size_t>(particles));
   std::vector<uint8_t> inside(static_cast<std::size_t>(particles));
   if (particles > 0) {
-    inside_sphere_kernel<<<blocks_for(particles), kBlock, 0, d.compute>>>(d.x(0), d.x(1), d.x(2), particles, tool,
-                                                                          d.flags.data());
+    grabbable_kernel<<<blocks_for(particles), kBlock, 0, d.compute>>>(d.x(0), d.x(1), d.x(2), d.inv_mass.data(),
+                                                                      particles, tool, d.flags.data());
     CTSURG_CUDA_LAUNCHED(d.compute);
     d.flags.download(inside.data(), inside.size(), d.compute);
     CTSURG_CUDA_CHECK(cudaStreamSynchronize(d.compute));

@@ -23,7 +23,8 @@ SphereView sphere_view(const std::array<double, 3>& centre, double radius, const
 Grab grab_particles_in_sphere(const ParticleState& state, const Sphere& tool, int threads) {
   const SphereView s = sphere_view(tool.centre, tool.radius, "grab");
   std::vector<uint8_t> inside(static_cast<std::size_t>(state.count()));
-  cpu::inside_sphere(state.x.data(), state.y.data(), state.z.data(), state.count(), s, inside.data(), threads);
+  cpu::grabbable(state.x.data(), state.y.data(), state.z.data(), state.inv_mass.data(), state.count(), s, inside.data(),
+                 threads);
   Grab grab;  // compaction in id order: deterministic
   for (int32_t i = 0; i < state.count(); ++i) {
     if (!inside[i]) continue;

@@ -6,11 +6,11 @@
 
 namespace ctsurg::sim::cpu {
 
-void inside_sphere(const Real* x, const Real* y, const Real* z, int32_t count, const SphereView& tool, uint8_t* inside,
-                   int threads) {
+void grabbable(const Real* x, const Real* y, const Real* z, const Real* inv_mass, int32_t count, const SphereView& tool,
+               uint8_t* inside, int threads) {
   const int t = thread_count(threads, count);
 #pragma omp parallel for schedule(static) num_threads(t)
-  for (int32_t i = 0; i < count; ++i) inside[i] = ctsurg::sim::inside_sphere(x[i], y[i], z[i], tool) ? 1 : 0;
+  for (int32_t i = 0; i < count; ++i) inside[i] = ctsurg::sim::grabbable(x, y, z, inv_mass, tool, i) ? 1 : 0;
 }
 
 int64_t probe(Real* x, Real* y, Real* z, const Real* inv_mass, int32_t count, const SphereView& tool, int threads) {

@@ -30,8 +30,8 @@ int64_t cut_explicit(const int32_t* ends, uint8_t* alive, int32_t springs, const
                      const TriangleView& blade, int threads);
 
 // Spherical tools.
-void inside_sphere(const Real* x, const Real* y, const Real* z, int32_t count, const SphereView& tool, uint8_t* inside,
-                   int threads);
+void grabbable(const Real* x, const Real* y, const Real* z, const Real* inv_mass, int32_t count, const SphereView& tool,
+               uint8_t* inside, int threads);
 int64_t probe(Real* x, Real* y, Real* z, const Real* inv_mass, int32_t count, const SphereView& tool, int threads);
 void place_grabbed(Real* x, Real* y, Real* z, const int32_t* ids, const Real* offsets, int64_t count,
                    const SphereView& tool, int threads);

@@ -156,9 +156,10 @@ void SpringEngine::apply_tools(const std::vector<ToolInput>& tools) {
           h.grab = stepper_->capture({tool.centre, tool.radius_mm}, true, &h.handle);
           if (h.grab->particles.empty()) {
             throw InputError(options_.where, tool.label,
-                             "grabs no particle at t = " + std::to_string(time_) + " s (sphere of radius " +
+                             "grabs no free particle at t = " + std::to_string(time_) + " s (sphere of radius " +
                                  std::to_string(tool.radius_mm) + " mm at " + lps_text(tool.centre, origin_) +
-                                 "); move it onto the tissue or set snap_to_tissue: true");
+                                 "; fixed particles are not grabbed); move it onto free tissue or set "
+                                 "snap_to_tissue: true");
           }
           note(tool.label + ": grabbed " + std::to_string(h.grab->particles.size()) + " particles at t = " +
                std::to_string(time_) + " s");

@@ -258,3 +258,20 @@ TEST(Scenario, RenderRequestsAreChecked) {
   EXPECT_NE(error_of(base + "  - {name: a/b}\n").find("render[1].name: use letters"), std::string::npos);
   EXPECT_NE(error_of(base + "  - {name: b, layout: mosaic}\n").find("render[1].layout: 'mosaic' is not one of"), std::string::npos);
 }
+
+// A fuzz finding (tests/fuzz_regressions/README.md): a map with a list as a key made yaml-cpp's
+// conversion exception escape the parser. Now an InputError naming the file.
+TEST(Scenario, YamlShapesTheChecksDidNotForeseeAreInputErrors) {
+  const std::string text = ctsurg::test::read_bytes(ctsurg::test::source_dir() / "tests" / "fuzz_regressions" /
+                                                    "fuzz_scenario" / "crash-c4056c39");
+  ASSERT_FALSE(text.empty());
+  EXPECT_THROW(parse_scenario(text, "fuzz.yaml", "/nonexistent"), ctsurg::InputError);
+  for (const char* bad : {"? [a, b]\n: 1\n", "{[1]: 2}", "name: x\n? {a: 1}\n: y\n", "ctsurg_scenario: [1\n"}) {
+    try {
+      parse_scenario(bad, "s.yaml", "/nonexistent");
+      ADD_FAILURE() << "accepted: " << bad;
+    } catch (const ctsurg::InputError& e) {
+      EXPECT_EQ(e.file(), "s.yaml") << e.what();
+    }
+  }
+}

@@ -165,7 +165,7 @@ TEST(ScenarioRun, GrabOnEmptySpaceIsRefused) {
     (void)run_scenario(s);
     ADD_FAILURE();
   } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("tools[0] (grab): grabs no particle"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("tools[0] (grab): grabs no free particle"), std::string::npos) << e.what();
   }
   // snap_to_tissue moves the same tool onto the nearest particle.
   auto snapped = s;

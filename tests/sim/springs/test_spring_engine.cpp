@@ -101,6 +101,32 @@ TEST(SpringEngine, GrabCarriesItsParticlesAndLetsGoForGood) {
   }
 }
 
+// Issue 17: a spring-model grab moved particles declared fixed (the FEM refused the same scenario).
+// A grab captures free particles only, and a grab that holds none is refused.
+TEST(SpringEngine, AGrabLeavesFixedParticlesWhereTheyAre) {
+  std::vector<std::string> notes;
+  SpringEngine e = engine(true, &notes);
+  const auto& model = std::get<SpringGridModel>(e.model());
+  const int32_t fixed = model.particle_at(1, 2, 2), free = model.particle_at(2, 2, 2);  // x = 12 (fixed), 14 mm
+  const float fixed_z = e.state().z[static_cast<size_t>(fixed)];
+  std::vector<ToolInput> tools{sphere_tool(ToolKind::grab, {13, -16, 34}, 1.2)};  // holds both
+  ASSERT_TRUE(e.step(tools, 1).stable);
+  ASSERT_EQ(notes.size(), 1u);
+  EXPECT_NE(notes[0].find("grabbed 1 particles"), std::string::npos) << notes[0];
+  tools[0].centre = {13, -16, 37};
+  ASSERT_TRUE(e.step(tools, 1).stable);
+  EXPECT_EQ(e.state().z[static_cast<size_t>(fixed)], fixed_z) << "a fixed particle was grabbed";
+  EXPECT_FLOAT_EQ(e.state().z[static_cast<size_t>(free)], 37.f);
+  SpringEngine fresh = engine();
+  try {
+    (void)fresh.step({sphere_tool(ToolKind::grab, {12, -16, 34}, 1.0)}, 1);  // only the fixed particle
+    ADD_FAILURE() << "a grab holding only fixed particles was accepted";
+  } catch (const InputError& err) {
+    EXPECT_EQ(err.field(), "tools[0] (grab)");
+    EXPECT_NE(err.problem().find("no free particle"), std::string::npos) << err.problem();
+  }
+}
+
 TEST(SpringEngine, BladeSweepsCutTheSpringsAndTheSurface) {
   SpringEngine e = engine();
   const size_t triangles = e.triangles().size();

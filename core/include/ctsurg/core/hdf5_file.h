@@ -2,6 +2,19 @@
 // (docs/formats.md). Datasets are chunked and deflate-compressed with the shuffle filter; object
 // modification times are not recorded, so the same content gives byte-identical files.
 // Every failure names the file and the object: "grid.h5: /grid/fraction: dataset missing".
+//
+// Verified both ways:
+//  - Files are written in the HDF5 1.10 format (superblock version 3, version 2 object headers,
+//    checksummed chunk indexes), so every piece of metadata carries a checksum, and every dataset is
+//    chunked with the Fletcher-32 filter, so every chunk of data does too: a flipped bit or a cut
+//    file is refused by the library instead of read as garbage or crashing it.
+//  - A file is built in memory (HDF5's core driver) and written to disk in one pass on flush and
+//    close, whose errors are checked; close() then opens the written file again. HDF5's default
+//    driver wrote piecemeal and lost some errors (a full disk could leave an unreadable file that
+//    looked finished, and the library crashed at exit after one); here a failed write is a
+//    RuntimeError naming the file, and the writer's commit (atomic_output.h) fsyncs it.
+//  - open() refuses a file whose superblock is older than version 2 (no checksums: not written by
+//    this ctsurg), and anything that is not a regular file.
 #pragma once
 
 #include <hdf5.h>
@@ -29,6 +42,8 @@ class Handle {
   hid_t get() const { return id_; }
   bool valid() const { return id_ >= 0; }
   void reset();
+  // Closes the handle now and returns the closer's status (reset() ignores it).
+  herr_t close();
 
  private:
   hid_t id_ = -1;
@@ -87,20 +102,25 @@ class Group {
 
 class File {
  public:
-  // Creates (truncating) a file for writing; normally the temp_path() of an AtomicOutput.
-  // `display_name` is used in messages (the final path, not the temporary one).
+  // Creates a file for writing, held in memory and written to `path` on close(); `path` is normally
+  // the temp_path() of an AtomicOutput. `display_name` is used in messages (the final path).
   static File create(const std::filesystem::path& path, const std::string& display_name = {});
-  // Opens an existing ctsurg HDF5 file read-only. InputError when missing or not HDF5.
+  // Opens an existing ctsurg HDF5 file read-only. InputError when missing, not a regular file, not
+  // HDF5, or written without checksums (superblock version < 2).
   static File open(const std::filesystem::path& path);
   Group root() const;
   const std::string& name() const { return name_; }
-  // Flushes and closes; further use is an error.
+  // A file from create(): writes it to its path and closes it, then checks that it opens
+  // (RuntimeError naming the file when anything fails). A file from open(): closes it. Further use
+  // is an error.
   void close();
 
  private:
-  File(Handle h, std::string name) : h_(std::move(h)), name_(std::move(name)) {}
+  File(Handle h, std::string name, std::filesystem::path path = {})
+      : h_(std::move(h)), name_(std::move(name)), write_to_(std::move(path)) {}
   Handle h_;
   std::string name_;
+  std::filesystem::path write_to_;  // created files: where close() writes the image
 };
 
 }  // namespace ctsurg::h5

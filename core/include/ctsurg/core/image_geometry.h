@@ -40,9 +40,17 @@ struct ImageGeometry {
   // (checked at the eight corner voxels).
   bool same_lattice(const ImageGeometry& other, double tolerance_mm = 1e-3) const;
 
-  // Throws InputError(file, field, problem) unless dims are positive, spacing is finite and
-  // positive, origin is finite and direction has finite unit columns and is not singular.
+  // Throws InputError(file, field, problem) unless the geometry is finite and sane: dims positive
+  // with at most kMaxVoxels voxels (so voxel_count() cannot overflow), spacing in [kMinSpacingMm,
+  // kMaxSpacingMm], origin and extent within kMaxCoordinateMm of the scanner's origin, and
+  // direction with finite unit columns, not singular. A corrupt header (a spacing of 1e38 mm) is
+  // refused here instead of hanging a later stage.
   void validate(const std::string& file) const;
+
+  static constexpr int64_t kMaxVoxels = int64_t{1} << 48;
+  static constexpr double kMinSpacingMm = 1e-4;        // 0.1 um: beyond micro-CT
+  static constexpr double kMaxSpacingMm = 1e4;         // 10 m
+  static constexpr double kMaxCoordinateMm = 1e7;      // 10 km
 };
 
 }  // namespace ctsurg

@@ -10,6 +10,7 @@
 //   /grid attributes: cell_mm, occupancy_threshold, particles (count), labels (JSON: id -> name)
 #pragma once
 
+#include "ctsurg/core/atomic_output.h"
 #include "ctsurg/core/provenance.h"
 #include "ctsurg/core/volume.h"
 
@@ -31,7 +32,7 @@ struct OccupancyGrid {
 };
 
 void write_occupancy_grid_file(const std::filesystem::path& path, const OccupancyGrid& grid,
-                               const Provenance& provenance);
+                               const Provenance& provenance, OutputUnit* unit = nullptr);
 OccupancyGrid read_occupancy_grid_file(const std::filesystem::path& path);
 
 }  // namespace ctsurg

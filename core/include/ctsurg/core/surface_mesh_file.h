@@ -30,6 +30,7 @@
 // plus an XDMF sidecar describing a triangle mesh. See docs/formats.md.
 #pragma once
 
+#include "ctsurg/core/atomic_output.h"
 #include "ctsurg/core/image_geometry.h"
 #include "ctsurg/core/provenance.h"
 
@@ -73,7 +74,8 @@ struct SurfaceMesh {
 
 // Writes `path` (and its .xdmf sidecar) atomically. InputError(path, "/surface", ...) for an empty
 // mesh or inconsistent array sizes (optional arrays included: each empty or of its full size).
-void write_surface_mesh_file(const std::filesystem::path& path, const SurfaceMesh& mesh, const Provenance& provenance);
+void write_surface_mesh_file(const std::filesystem::path& path, const SurfaceMesh& mesh, const Provenance& provenance,
+                             OutputUnit* unit = nullptr);
 // Reads a surface mesh file; InputError naming the file and object when it is not one or when an
 // array has the wrong shape or a triangle names a vertex that does not exist.
 SurfaceMesh read_surface_mesh_file(const std::filesystem::path& path);

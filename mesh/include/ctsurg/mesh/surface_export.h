@@ -18,8 +18,8 @@
 
 #include <cstdint>
 #include <filesystem>
-#include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace ctsurg {
@@ -28,30 +28,23 @@ namespace ctsurg {
 // the suffix is none of the export formats.
 std::string surface_export_format(const std::filesystem::path& path);
 
-// Writes `mesh` to `path` (a temporary path is fine: the format comes from `format_of`'s suffix,
-// defaulting to `path`). InputError(path, "suffix", ...) for an unknown suffix; RuntimeError when
-// Assimp fails. Not atomic by itself: callers write to an AtomicOutput's temp_path().
-void export_surface_mesh(const std::filesystem::path& path, const SurfaceMesh& mesh,
-                         const std::filesystem::path& format_of = {}, const std::string& normal_map_uri = {});
+// The files of an export of `mesh` to `output` (by its suffix), made in memory by Assimp under
+// their final names: (file name, bytes), the output's own file first, then what goes beside it (a
+// .gltf's .bin). InputError(output, "suffix", ...) for an unknown suffix; RuntimeError when Assimp
+// fails (its messages folded in). Nothing is written to disk.
+std::vector<std::pair<std::string, std::string>> export_surface_mesh(const std::filesystem::path& output,
+                                                                     const SurfaceMesh& mesh,
+                                                                     const std::string& normal_map_uri = {});
 
-// An export of `mesh` to `output` (by its suffix) and the files that go with it, all written to
-// temporary names in the output's folder at construction; commit() moves every one into place, and
-// an export never committed leaves nothing behind. .gltf writes NAME.bin beside NAME.gltf and names
-// it inside the JSON, so it is exported into a private folder under its final name and moved; with
-// a normal map (`normal_map_png`, the encoded PNG) its material references NAME_normal_map.png,
-// written beside it. Other formats embed the map (.glb) or have no material.
-class PendingSurfaceExport {
- public:
-  PendingSurfaceExport(const std::filesystem::path& output, const SurfaceMesh& mesh,
-                       const std::vector<uint8_t>& normal_map_png = {});
-  void commit();
+// Every file an export to `output` writes: the output; for .gltf also NAME.bin and, with a normal
+// map, NAME_normal_map.png. For check_output_paths().
+std::vector<std::filesystem::path> surface_export_files(const std::filesystem::path& output, bool normal_map);
 
- private:
-  AtomicOutput out_;
-  std::unique_ptr<AtomicOutput> bin_, png_;
-};
-
-// Writes `bytes` to `path` (a temporary path of an AtomicOutput); RuntimeError naming `name` on failure.
-void write_file_bytes(const std::filesystem::path& path, const std::vector<uint8_t>& bytes, const std::string& name);
+// Exports `mesh` to `output` and adds its files to `unit`, each written (every error checked) to
+// its temporary name; the caller commits the unit. .gltf writes NAME.bin beside NAME.gltf and, with
+// a normal map (`normal_map_png`, the encoded PNG), NAME_normal_map.png, which its material
+// references. Other formats embed the map (.glb) or have no material.
+void add_surface_export(OutputUnit& unit, const std::filesystem::path& output, const SurfaceMesh& mesh,
+                        const std::vector<uint8_t>& normal_map_png = {});
 
 }  // namespace ctsurg

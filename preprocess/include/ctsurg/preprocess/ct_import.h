@@ -3,6 +3,7 @@
 #pragma once
 
 #include "ctsurg/core/hu_volume_file.h"
+#include "ctsurg/preprocess/detached_data_files.h"
 #include "ctsurg/preprocess/dicom_series_reader.h"
 
 #include <filesystem>
@@ -17,6 +18,8 @@ struct CtImportOptions {
   // Applied to non-DICOM inputs whose stored values are not HU (e.g. HU + 1024 in raw exports):
   // HU = stored x slope + intercept. DICOM carries its own RescaleSlope/Intercept.
   std::optional<double> rescale_slope, rescale_intercept;
+  // Detached data files may lie outside their header's folder (image_file_reader.h).
+  bool data_files_anywhere = false;
 };
 
 struct CtImport {
@@ -25,11 +28,8 @@ struct CtImport {
   std::vector<std::string> warnings;         // geometry and value warnings, with numbers
 };
 
+// Throws InputError naming the input for anything it cannot read, for a rescale that makes a value
+// non-finite or beyond float range, and (RuntimeError) when the volume does not fit in memory.
 CtImport import_ct(const std::filesystem::path& input, const CtImportOptions& options);
-
-// The data files a detached header points to, resolved against the header's folder: NRRD
-// ("data file:") and MetaImage ("ElementDataFile ="), each as a single name, a printf-style pattern
-// with min max step, or LIST followed by names. Empty for attached data (and MetaImage LOCAL).
-std::vector<std::filesystem::path> detached_data_files(const std::filesystem::path& header);
 
 }  // namespace ctsurg

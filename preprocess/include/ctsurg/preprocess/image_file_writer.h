@@ -11,8 +11,12 @@
 // ends in the real suffix (ITK and the NIfTI library pick the format and gzip compression from
 // it), then is renamed into place through AtomicOutput. A failure leaves no file behind and never
 // touches an existing file of that name. Output bytes depend only on the volume (no timestamps).
+// ITK's writers do not report every write error (a full disk gave a truncated file), so the
+// temporary file is read back through the verifying reader (image_file_reader.h) and compared with
+// the volume, value for value, before it is committed.
 #pragma once
 
+#include "ctsurg/core/atomic_output.h"
 #include "ctsurg/core/volume.h"
 
 #include <cstdint>
@@ -27,10 +31,11 @@ void check_image_output_path(const std::filesystem::path& path);
 // Writes `volume` (geometry.dims voxels, x fastest; HU or labels, stored in the file with the
 // volume's own voxel type: float32, int16, uint8 or uint16) to `path`. InputError for an
 // unsupported suffix or a missing/unwritable folder, or for invalid geometry (the message names
-// `path`); RuntimeError when ITK fails to write.
-void write_image_file(const Volume<float>& volume, const std::filesystem::path& path);
-void write_image_file(const Volume<int16_t>& volume, const std::filesystem::path& path);
-void write_image_file(const Volume<uint8_t>& volume, const std::filesystem::path& path);
-void write_image_file(const Volume<uint16_t>& volume, const std::filesystem::path& path);
+// `path`); RuntimeError when ITK fails to write or the file does not read back. With a `unit`, the
+// file is added to it and committed with the run's other outputs (atomic_output.h).
+void write_image_file(const Volume<float>& volume, const std::filesystem::path& path, OutputUnit* unit = nullptr);
+void write_image_file(const Volume<int16_t>& volume, const std::filesystem::path& path, OutputUnit* unit = nullptr);
+void write_image_file(const Volume<uint8_t>& volume, const std::filesystem::path& path, OutputUnit* unit = nullptr);
+void write_image_file(const Volume<uint16_t>& volume, const std::filesystem::path& path, OutputUnit* unit = nullptr);
 
 }  // namespace ctsurg

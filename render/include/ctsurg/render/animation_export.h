@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <vector>
 
+#include "ctsurg/core/atomic_output.h"
 #include "ctsurg/render/rgb_image.h"
 
 namespace ctsurg {
@@ -16,6 +17,8 @@ std::string animation_encoder(const std::filesystem::path& path);
 // InputError(path, "suffix", ...) unless .gif or .mp4; InputError(path, "encoder", ...) when no
 // encoder is installed (checked before any rendering by the tool); RuntimeError when it fails.
 void check_animation_output(const std::filesystem::path& path);
-void write_animation(const std::filesystem::path& path, const std::vector<RgbImage>& frames, double frames_per_second);
+// With a `unit`, the animation is added to it and committed with the pictures (atomic_output.h).
+void write_animation(const std::filesystem::path& path, const std::vector<RgbImage>& frames, double frames_per_second,
+                     OutputUnit* unit = nullptr);
 
 }  // namespace ctsurg

@@ -23,7 +23,10 @@ const std::vector<Material>& material_presets();
 // The preset called `name`; InputError(file, field, ...) listing the known names otherwise.
 Material material_preset(const std::string& name, const std::string& file = "material",
                          const std::string& field = "material.preset");
-// Checks E > 0, -1 < nu < 0.5 and density > 0 (finite); InputError(file, "material.<field>", ...).
+// Checks 1 Pa <= E <= 1e11 Pa, -1 < nu < 0.5 and 0.01 <= density <= 25 g/cm^3 (finite);
+// InputError(file, "material.<field>", ...) naming the field and the range.
+inline constexpr double kMinYoungsModulusPa = 1.0;
+inline constexpr double kMaxYoungsModulusPa = 1e11;
 void validate_material(const Material& material, const std::string& file = "material");
 
 }  // namespace ctsurg::sim

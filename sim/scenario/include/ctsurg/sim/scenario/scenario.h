@@ -85,6 +85,11 @@ struct SolverSpec {
   int max_cg_iterations = 0;       // iterative: 0 = twice the unknowns
 };
 
+// Bounds of the time section (scenario.cpp): simulated time, the smallest step, output frames.
+inline constexpr double kMaxDurationS = 86400;
+inline constexpr double kMinStepS = 1e-9;
+inline constexpr double kMaxFrames = 100000;
+
 struct Scenario {
   std::filesystem::path file;       // the scenario file (as given)
   std::string name;
@@ -105,8 +110,8 @@ struct Scenario {
   std::array<double, 3> gravity{0, 0, 0};  // mm/s^2, LPS
   std::vector<FixedRegionSpec> fixed;
   std::vector<ToolAction> tools;
-  double duration_s = 0;            // > 0
-  double dt_s = 0;                  // 0 = auto (safety_factor * critical step)
+  double duration_s = 0;            // (0, kMaxDurationS]
+  double dt_s = 0;                  // 0 = auto (safety_factor * critical step), else >= kMinStepS
   double safety_factor = 0.5;       // (0, 1]
   int max_step_halvings = 0;        // on instability: restart from the last frame with dt / 2, this often
   double frame_interval_s = 0;      // output frame every ...; > 0

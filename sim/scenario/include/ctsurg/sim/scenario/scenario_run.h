@@ -44,17 +44,27 @@ struct RunReport {
   std::vector<std::string> notes;  // what the run decided (grab captures, auto step, ...), for the log
 };
 
+// A limit on how long a run may take. After `sample_s` seconds of running, the run's total time is
+// estimated from its speed so far (wall time per simulated second); when the estimate exceeds
+// `max_wall_s`, the run stops with an InputError naming time.duration_s, the estimate and the limit
+// (ctsurg-sim --force lifts it). max_wall_s = 0: no limit.
+struct RunBudget {
+  double max_wall_s = 0;
+  double sample_s = 1.0;
+};
+
 // Runs `scenario`; progress(fraction of the simulated time) is called now and then (may be empty).
-// Throws InputError for a bad input file or a tool/region that selects nothing, RuntimeError when the
-// run is unstable beyond the allowed halvings.
+// Throws InputError for a bad input file or a tool/region that selects nothing, or a run estimated
+// to take longer than `budget` allows; RuntimeError when the run is unstable beyond the allowed
+// halvings.
 Trajectory run_scenario(const Scenario& scenario, RunReport* report = nullptr,
-                        const std::function<void(double)>& progress = {});
+                        const std::function<void(double)>& progress = {}, const RunBudget& budget = {});
 // The same loop over an engine the caller made (make_scenario_engine, or any SimulationEngine that takes
 // this scenario's tools): the seam for models beyond the scenario's kinds. The scenario gives the tools,
 // the time and the output; of its model section only the label (scenario_model.h) and the surface file
 // (hashed into the trajectory when the engine has a surface) are used. report->notes holds what the
 // loop decided.
 Trajectory run_scenario(const Scenario& scenario, ScenarioEngine engine, RunReport* report = nullptr,
-                        const std::function<void(double)>& progress = {});
+                        const std::function<void(double)>& progress = {}, const RunBudget& budget = {});
 
 }  // namespace ctsurg::sim

@@ -74,7 +74,7 @@ class DeviceSimulation {
   // Tools (sphere_tools.h, spring_cutting.h), on the device's current positions.
   // Projects the free particles inside the sphere onto its surface; returns how many moved.
   int64_t probe(const Sphere& tool);
-  // Captures the particles strictly inside the sphere (increasing ids) with their offsets, holds the
+  // Captures the free particles strictly inside the sphere (increasing ids) with their offsets, holds the
   // grab on the device next to any grabs already held, and returns a copy; *handle (when given) names
   // it: the lowest handle not held, so the first grab is 0. The inside flags (1 byte per particle)
   // come back to the host for an ordered compaction: grabbing is an event, not a per-step operation.

@@ -1,8 +1,8 @@
 // Spherical interaction tools at the model level (Mosegaard & Sorensen 2005, section 2.7):
 //  - probe: particles inside the sphere are projected onto its surface (along the ray from the
 //    centre; a particle exactly at the centre goes to centre + (0, 0, r)); fixed particles stay;
-//  - grab: the particles inside the sphere at grab time are captured with their offsets from the
-//    centre; while grabbed, apply_grab() after each step sets them to centre + offset (overriding the
+//  - grab: the free particles inside the sphere at grab time are captured with their offsets from
+//    the centre (fixed particles stay fixed, as the FEM's grabs leave fixed nodes alone); while grabbed, apply_grab() after each step sets them to centre + offset (overriding the
 //    integration, as the papers do), and their neighbours follow through the springs.
 // Per-particle kernels: src/sphere_tools_impl.h. Units: LPS mm.
 #pragma once
@@ -21,7 +21,7 @@ struct Grab {
   std::vector<Real> offsets;       // #G x 3, position - centre at grab time, mm
 };
 
-// The particles strictly inside the sphere (current positions) and their offsets. Throws
+// The free particles (inv_mass > 0) strictly inside the sphere (current positions) and their offsets. Throws
 // InputError("grab", "radius", ...) unless the radius is finite and > 0.
 Grab grab_particles_in_sphere(const ParticleState& state, const Sphere& tool, int threads = 0);
 // Sets every grabbed particle's current position to centre + offset (LPS mm).

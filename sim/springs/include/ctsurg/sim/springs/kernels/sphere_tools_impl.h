@@ -17,6 +17,13 @@ CTSURG_HD inline bool inside_sphere(Real x, Real y, Real z, const SphereView& s)
   return dx * dx + dy * dy + dz * dz < s.radius * s.radius;
 }
 
+// True when particle i is free (a fixed particle stays where the scene holds it, as the FEM's
+// grabs leave fixed nodes alone) and inside the sphere: the particles a grab captures.
+CTSURG_HD inline bool grabbable(const Real* x, const Real* y, const Real* z, const Real* inv_mass, const SphereView& s,
+                                int64_t i) {
+  return inv_mass[i] != Real(0) && inside_sphere(x[i], y[i], z[i], s);
+}
+
 // Moves particle i onto the sphere when it is inside and free; returns 1 when it moved.
 CTSURG_HD inline int probe_particle(Real* x, Real* y, Real* z, const Real* inv_mass, const SphereView& s, int64_t i) {
   if (inv_mass[i] == Real(0) || !inside_sphere(x[i], y[i], z[i], s)) return 0;

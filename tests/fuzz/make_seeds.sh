@@ -1,0 +1,51 @@
+#!/usr/bin/env bash
+# tests/fuzz/make_seeds.sh BIN OUT: the seed corpus of every fuzz target, one folder per target under OUT,
+# from data_samples (the heart mask, the scenarios) and from small files the release tools in BIN
+# make (a phantom in each image format, and the ctsurg files of the pipeline on it). Deterministic.
+set -euo pipefail
+bin=$(cd "$1" && pwd)
+out=$2
+root=$(cd "$(dirname "$0")/../.." && pwd)
+rm -rf "$out"
+mkdir -p "$out"/{fuzz_nifti,fuzz_nrrd,fuzz_metaimage,fuzz_dicom_folder,fuzz_scenario}
+mkdir -p "$out"/{fuzz_hu_volume_file,fuzz_occupancy_grid_file,fuzz_surface_mesh_file,fuzz_tet_mesh_file,fuzz_trajectory_file}
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+q="-q"
+
+cp "$root/data_samples/heart/heart_mask.nii.gz" "$out/fuzz_nifti/heart_mask.nii.gz"
+cp "$root/data_samples/scenarios/"*.yaml "$out/fuzz_scenario/"
+for suffix in nii nii.gz nrrd mha; do
+  "$bin/ctsurg-phantom" $q sphere "$work/sphere.$suffix" --radius-mm 5 --spacing-mm 2 --margin-mm 2 --supersample 1
+done
+cp "$work/sphere.nii" "$work/sphere.nii.gz" "$out/fuzz_nifti/"
+cp "$work/sphere.nrrd" "$out/fuzz_nrrd/"
+cp "$work/sphere.mha" "$out/fuzz_metaimage/"
+
+# The pipeline on a small ellipsoid shell: each stage's file is a seed of its reader.
+"$bin/ctsurg-phantom" $q ellipsoid-shell "$work/shell.nii.gz" --semi-axes-mm 12,9,7 --thickness-mm 4 --spacing-mm 1.5 \
+  --supersample 1
+"$bin/ctsurg-import" $q "$work/shell.nii.gz" "$work/ct.h5"
+"$bin/ctsurg-grid" $q "$work/ct.h5" "$work/grid.h5" --hu-min 0 --voxel-mm 3 --no-preview
+"$bin/ctsurg-surface" $q "$work/grid.h5" "$work/surface.h5"
+"$bin/ctsurg-tetmesh" $q "$work/grid.h5" "$work/tetmesh.h5" --cell-size 4
+cat > "$work/pull.yaml" <<'YAML'
+ctsurg_scenario: 1
+model: {kind: spring_grid, grid: grid.h5, surface: surface.h5}
+material: {preset: liver, damping_per_s: 20}
+fixed: [{box_fraction: {min: [0, 0, 0], max: [0.3, 1, 1]}}]
+tools:
+  - grab: {radius_mm: 3, snap_to_tissue: true, path: [{t: 0, at_fraction: [1, 0.5, 0.5]}, {t: 0.01, offset_mm: [0, 0, 2]}]}
+time: {duration_s: 0.02}
+output: {trajectory: trajectory.h5, frame_interval_s: 0.005}
+YAML
+"$bin/ctsurg-sim" $q "$work/pull.yaml"
+cp "$work/ct.h5" "$out/fuzz_hu_volume_file/"
+cp "$work/grid.h5" "$out/fuzz_occupancy_grid_file/"
+cp "$work/surface.h5" "$out/fuzz_surface_mesh_file/"
+cp "$work/tetmesh.h5" "$out/fuzz_tet_mesh_file/"
+cp "$work/trajectory.h5" "$out/fuzz_trajectory_file/"
+cp "$work/pull.yaml" "$out/fuzz_scenario/"
+
+python3 "$root/tests/fuzz/make_dicom_seed.py" "$out/fuzz_dicom_folder/two_slices.bin"
+echo "fuzz seeds: $(find "$out" -type f | wc -l) files, $(du -sk "$out" | cut -f1) KiB in $out"
