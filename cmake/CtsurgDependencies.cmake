@@ -22,18 +22,26 @@ if(CTSURG_BUILD_BENCH)
 endif()
 # Assimp only for exporting surfaces to glTF/OBJ/STL/PLY, confined to mesh/src/surface_export.cpp.
 find_package(assimp 5.2 REQUIRED)
+# A library that ships no CMake package, found by its header and library and imported as TARGET:
+#   ctsurg_import_library(TARGET PREFIX HEADER LIBRARY DEBIAN_PACKAGE [PATH_SUFFIXES folder...])
+# with the cache variables PREFIX_INCLUDE_DIR and PREFIX_LIBRARY; a clear error naming the package when absent.
+function(ctsurg_import_library target prefix header library package)
+  cmake_parse_arguments(ARG "" "" "PATH_SUFFIXES" ${ARGN})
+  find_path(${prefix}_INCLUDE_DIR "${header}" PATH_SUFFIXES ${ARG_PATH_SUFFIXES})
+  find_library(${prefix}_LIBRARY "${library}")
+  if(NOT ${prefix}_INCLUDE_DIR OR NOT ${prefix}_LIBRARY)
+    message(FATAL_ERROR "${target} not found (${header}, lib${library}): install ${package} (scripts/install-deps.sh)")
+  endif()
+  add_library(${target} UNKNOWN IMPORTED)
+  set_target_properties(${target} PROPERTIES IMPORTED_LOCATION "${${prefix}_LIBRARY}"
+                        INTERFACE_INCLUDE_DIRECTORIES "${${prefix}_INCLUDE_DIR}")
+endfunction()
+
 # CGAL (header-only, with GMP/MPFR) for tetrahedral meshing and surface decimation, confined to the .cpp files that use it.
 find_package(CGAL 5.5 REQUIRED)
 # OSMesa (Mesa's offscreen OpenGL, llvmpipe: an OpenGL 4.5 core context without a window system) for the
 # render stage; libOSMesa also exports the GL entry points, so nothing else is linked.
-find_path(OSMESA_INCLUDE_DIR GL/osmesa.h)
-find_library(OSMESA_LIBRARY OSMesa)
-if(NOT OSMESA_INCLUDE_DIR OR NOT OSMESA_LIBRARY)
-  message(FATAL_ERROR "OSMesa not found: install libosmesa6-dev (scripts/install-deps.sh)")
-endif()
-add_library(OSMesa::OSMesa UNKNOWN IMPORTED)
-set_target_properties(OSMesa::OSMesa PROPERTIES IMPORTED_LOCATION "${OSMESA_LIBRARY}"
-                      INTERFACE_INCLUDE_DIRECTORIES "${OSMESA_INCLUDE_DIR}")
+ctsurg_import_library(OSMesa::OSMesa OSMESA GL/osmesa.h OSMesa libosmesa6-dev)
 
 # Scenario files (sim/src/scenario.cpp): YAML (JSON is read as YAML 1.2 flow style).
 find_package(yaml-cpp REQUIRED)
@@ -42,11 +50,4 @@ find_package(yaml-cpp REQUIRED)
 # (sim/fem/src/sparse_cholesky.cpp, docs/fem.md). Debian 12's SuiteSparse 5 ships no CMake package, so the
 # header and library are found directly. Its supernodal factorisation runs on BLAS: install-deps.sh installs
 # OpenBLAS, which Debian's alternatives then select over the reference BLAS (10x faster factorisations).
-find_path(CHOLMOD_INCLUDE_DIR cholmod.h PATH_SUFFIXES suitesparse)
-find_library(CHOLMOD_LIBRARY cholmod)
-if(NOT CHOLMOD_INCLUDE_DIR OR NOT CHOLMOD_LIBRARY)
-  message(FATAL_ERROR "CHOLMOD not found: install libsuitesparse-dev (scripts/install-deps.sh)")
-endif()
-add_library(SuiteSparse::CHOLMOD UNKNOWN IMPORTED)
-set_target_properties(SuiteSparse::CHOLMOD PROPERTIES IMPORTED_LOCATION "${CHOLMOD_LIBRARY}"
-                      INTERFACE_INCLUDE_DIRECTORIES "${CHOLMOD_INCLUDE_DIR}")
+ctsurg_import_library(SuiteSparse::CHOLMOD CHOLMOD cholmod.h cholmod libsuitesparse-dev PATH_SUFFIXES suitesparse)

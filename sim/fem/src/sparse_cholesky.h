@@ -1,8 +1,9 @@
 // Sparse Cholesky factorisation of a symmetric positive definite matrix (the FEM's stiffness and
 // tangent matrices): SuiteSparse's CHOLMOD, supernodal, with its fill-reducing ordering (AMD, or METIS
 // nested dissection when AMD fills too much), over BLAS (OpenBLAS on Debian). Chosen by measurement
-// against Eigen's SimplicialLLT (docs/fem.md, "Direct solves"): on the Kuhn cube of 4,913 nodes the
-// numeric factorisation takes 0.13 s against 1.5 s, on 15,625 nodes 1.1 s against 41 s.
+// against Eigen's SimplicialLLT (bench/bench_sparse_factorisation.cpp, docs/fem.md "Direct solves"):
+// on the Kuhn cube of 4,913 nodes the numeric factorisation takes 0.25 s against 2.3 s, on 15,625
+// nodes 1.5 s against 50 s.
 //
 // The symbolic analysis (ordering, elimination tree, supernodes) is done once per sparsity pattern and
 // kept; each factorize() reuses it for new values. The matrix is given as compressed rows (or

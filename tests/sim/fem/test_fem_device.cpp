@@ -38,6 +38,9 @@
 namespace ctsurg::sim {
 namespace {
 
+using test::max_abs;
+using test::max_abs_difference;
+
 constexpr double kStepUlps = 4;
 constexpr double kNeoHookeanStepUlps = 32;
 constexpr double kRunTolerance = 1e-3;  // mm
@@ -57,20 +60,6 @@ FemModel box_model(FemMaterialModel material, std::array<int, 3> cells, std::arr
 }
 
 using test::nodes_where;
-
-double max_abs(const std::vector<double>& a) {
-  double m = 0;
-  for (double v : a) m = std::max(m, std::abs(v));
-  return m;
-}
-
-template <class T>
-double max_difference(const std::vector<T>& a, const std::vector<T>& b) {
-  EXPECT_EQ(a.size(), b.size());
-  double m = 0;
-  for (std::size_t k = 0; k < std::min(a.size(), b.size()); ++k) m = std::max(m, std::abs(double(a[k]) - double(b[k])));
-  return m;
-}
 
 const char* name(FemMaterialModel m) {
   return m == FemMaterialModel::linear ? "linear" : m == FemMaterialModel::stvk ? "stvk" : "neo_hookean";
@@ -108,7 +97,7 @@ TEST_F(FemDeviceTest, ExplicitStepsMatchTheCpuStepByStep) {
       gpu.step(1);
       const auto u = cpu.displacements();
       const double tolerance = ulps * std::numeric_limits<Real>::epsilon() * max_abs(u);
-      ASSERT_LE(max_difference(u, gpu.displacements()), tolerance) << name(material) << ", step " << k;
+      ASSERT_LE(max_abs_difference(u, gpu.displacements()), tolerance) << name(material) << ", step " << k;
     }
     EXPECT_GT(max_abs(cpu.displacements()), 0.1);  // the grab moved the tissue
     EXPECT_EQ(gpu.steps_taken(), cpu.steps_taken());
@@ -119,8 +108,8 @@ TEST_F(FemDeviceTest, ExplicitStepsMatchTheCpuStepByStep) {
     const auto f_cpu = cpu.internal_forces(), f_gpu = gpu.internal_forces();
     double f_max = 0;
     for (Real f : f_cpu) f_max = std::max(f_max, std::abs(double(f)));
-    EXPECT_LE(max_difference(f_cpu, f_gpu), 1e-4 * f_max) << name(material);
-    EXPECT_LE(max_difference(cpu.positions(), gpu.positions()), 1e-5) << name(material);
+    EXPECT_LE(max_abs_difference(f_cpu, f_gpu), 1e-4 * f_max) << name(material);
+    EXPECT_LE(max_abs_difference(cpu.positions(), gpu.positions()), 1e-5) << name(material);
   }
 }
 
@@ -149,7 +138,7 @@ TEST_F(FemDeviceTest, ThousandStepsWithGravityGrabAndSphereMatchTheCpu) {
     run_with_tools(again, m);
     EXPECT_EQ(gpu.steps_taken(), 1000);
     EXPECT_EQ(gpu.time(), cpu.time());
-    EXPECT_LE(max_difference(cpu.displacements(), gpu.displacements()), kRunTolerance) << name(material);
+    EXPECT_LE(max_abs_difference(cpu.displacements(), gpu.displacements()), kRunTolerance) << name(material);
     EXPECT_GT(cpu.contacts(), 0) << name(material);
     // A node on the sphere's surface is inside or not by its last bits: allow a couple to differ.
     EXPECT_LE(std::abs(gpu.contacts() - cpu.contacts()), 2) << name(material);
@@ -186,7 +175,7 @@ TEST_F(FemDeviceTest, InversionStopsWithTheCpuMessageAndKeepsTheStateBeforeIt) {
   EXPECT_EQ(gpu.time(), cpu.time());
   const auto u = gpu.displacements();
   for (double v : u) ASSERT_TRUE(std::isfinite(v));
-  EXPECT_LE(max_difference(cpu.displacements(), u), kNeoHookeanStepUlps * std::numeric_limits<Real>::epsilon() * max_abs(u));
+  EXPECT_LE(max_abs_difference(cpu.displacements(), u), kNeoHookeanStepUlps * std::numeric_limits<Real>::epsilon() * max_abs(u));
   // The stop is cleared: the next call runs, meets the same inverted element and says so again.
   try {
     gpu.step(1);
@@ -220,7 +209,7 @@ TEST_F(FemDeviceTest, EnergyGrowthStopsAtTheSameCheck) {
   EXPECT_EQ(cpu.steps_taken(), 32);
   EXPECT_EQ(gpu.steps_taken(), 32);
   EXPECT_EQ(gpu.time(), cpu.time());
-  EXPECT_LE(max_difference(cpu.displacements(), gpu.displacements()),
+  EXPECT_LE(max_abs_difference(cpu.displacements(), gpu.displacements()),
             kStepUlps * std::numeric_limits<Real>::epsilon() * max_abs(cpu.displacements()));
 }
 
@@ -255,8 +244,8 @@ TEST_F(FemDeviceTest, StaticSolveWithTheDeviceCgMatchesTheCpu) {
     ASSERT_TRUE(gpu.report.converged) << name(material);
     const double scale = max_abs(cpu.displacements);
     EXPECT_GT(scale, 0.4) << name(material);
-    EXPECT_LE(max_difference(cpu.displacements, gpu.displacements), kStaticRelative * scale) << name(material);
-    EXPECT_LE(max_difference(cpu.reactions, gpu.reactions), 1e-6 * max_abs(cpu.reactions)) << name(material);
+    EXPECT_LE(max_abs_difference(cpu.displacements, gpu.displacements), kStaticRelative * scale) << name(material);
+    EXPECT_LE(max_abs_difference(cpu.reactions, gpu.reactions), 1e-6 * max_abs(cpu.reactions)) << name(material);
     EXPECT_EQ(gpu.report.free_components, cpu.report.free_components);
     EXPECT_EQ(gpu.report.newton_iterations, cpu.report.newton_iterations) << name(material);
     ASSERT_EQ(gpu.report.cg_iterations.size(), cpu.report.cg_iterations.size()) << name(material);

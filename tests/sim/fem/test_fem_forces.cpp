@@ -4,6 +4,7 @@
 
 #include "ctsurg/core/error.h"
 #include "ctsurg/sim/fem/fem_box_mesh.h"
+#include "fem_test_models.h"
 
 #include <gtest/gtest.h>
 
@@ -11,6 +12,8 @@
 
 namespace ctsurg::sim {
 namespace {
+
+using test::max_abs;
 
 FemModel block(FemMaterialModel model, std::array<int, 3> cells = {4, 3, 3}) {
   const auto box = fem_box_mesh(cells, {8.0, 6.0, 6.0}, {-4, -3, -3});
@@ -35,12 +38,6 @@ std::vector<double> rigid_motion(const FemModel& m, double angle) {
       u[3 * i + r] = v;
     }
   return u;
-}
-
-double max_abs(const std::vector<double>& v) {
-  double m = 0;
-  for (double x : v) m = std::max(m, std::abs(x));
-  return m;
 }
 
 TEST(FemForces, LargeRigidRotationGivesNoForceForNonlinearModelsButSpuriousForLinear) {

@@ -18,22 +18,13 @@
 namespace ctsurg::sim {
 namespace {
 
+using test::max_abs;
+using test::max_abs_difference;
+
 using test::nodes_where;
 
 FemModel beam(FemMaterialModel law, double youngs_pa = 3e4, std::array<int, 3> cells = {6, 2, 2}) {
   return test::fem_box_model(law, cells, {12, 4, 4}, youngs_pa, 0.3);
-}
-
-double max_abs_difference(const std::vector<double>& a, const std::vector<double>& b) {
-  double d = 0;
-  for (std::size_t k = 0; k < a.size(); ++k) d = std::max(d, std::abs(a[k] - b[k]));
-  return d;
-}
-
-double max_abs(const std::vector<double>& a) {
-  double d = 0;
-  for (double v : a) d = std::max(d, std::abs(v));
-  return d;
 }
 
 TEST(FemImplicitDynamics, FreeFallIsExactForConstantAcceleration) {

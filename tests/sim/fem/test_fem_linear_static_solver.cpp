@@ -18,6 +18,9 @@
 namespace ctsurg::sim {
 namespace {
 
+using test::max_abs;
+using test::max_abs_difference;
+
 FemModel box_model(FemMaterialModel law = FemMaterialModel::linear) { return test::fem_box_model(law, {5, 5, 6}, {10, 10, 12}); }
 
 using test::nodes_where;
@@ -28,18 +31,6 @@ std::vector<int32_t> top_centre(const FemModel& m) {
   for (int32_t i : nodes_where(m, 2, 12.0))
     if (std::hypot(m.nodes[3 * i] - 5, m.nodes[3 * i + 1] - 5) <= 2.5) out.push_back(i);
   return out;
-}
-
-double max_abs(const std::vector<double>& v) {
-  double m = 0;
-  for (double x : v) m = std::max(m, std::abs(x));
-  return m;
-}
-
-double max_diff(const std::vector<double>& a, const std::vector<double>& b) {
-  double m = 0;
-  for (std::size_t i = 0; i < a.size(); ++i) m = std::max(m, std::abs(a[i] - b[i]));
-  return m;
 }
 
 struct Case {
@@ -80,8 +71,8 @@ TEST(FemLinearStaticSolver, AgreesWithTheNewtonConjugateGradientSolver) {
   ASSERT_TRUE(cg.report.converged);
   const double scale = max_abs(cg.displacements);
   EXPECT_GT(scale, 0.4);
-  EXPECT_LT(max_diff(direct.displacements, cg.displacements), 1e-9 * scale);
-  EXPECT_LT(max_diff(direct.reactions, cg.reactions), 1e-7 * max_abs(cg.reactions));
+  EXPECT_LT(max_abs_difference(direct.displacements, cg.displacements), 1e-9 * scale);
+  EXPECT_LT(max_abs_difference(direct.reactions, cg.reactions), 1e-7 * max_abs(cg.reactions));
   for (std::size_t g = 0; g < c.grab.size(); ++g)  // grabbed nodes sit exactly at their targets
     for (int a = 0; a < 3; ++a) EXPECT_EQ(direct.displacements[3 * c.grab[g] + a], c.grab_d[3 * g + a]);
 }
@@ -135,7 +126,7 @@ TEST(FemLinearStaticSolver, ColumnAndBackSubstitutionPathsAgree) {
   FemLinearStaticSolver all_columns(m, c.supports, many);
   const auto a = back.solve(c.grab, c.grab_d, c.loads);
   const auto b = all_columns.solve(c.grab, c.grab_d, c.loads);
-  EXPECT_LT(max_diff(a.displacements, b.displacements), 1e-10 * max_abs(a.displacements));
+  EXPECT_LT(max_abs_difference(a.displacements, b.displacements), 1e-10 * max_abs(a.displacements));
   EXPECT_GT(all_columns.stats().columns, back.stats().columns);
 }
 

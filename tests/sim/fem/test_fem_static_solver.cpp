@@ -20,13 +20,8 @@
 namespace ctsurg::sim {
 namespace {
 
-FemMaterial material(FemMaterialModel model, double e = 3e4, double nu = 0.3) {
-  FemMaterial m;
-  m.model = model;
-  m.youngs_modulus = e;
-  m.poisson_ratio = nu;
-  return m;
-}
+using test::fem_material;
+using test::max_abs_difference;
 
 // Nodal forces of a uniform traction `t` (Pa) on the mesh's boundary faces in the plane
 // x_axis = value: area / 3 per corner of each triangle (exact for linear elements).
@@ -75,7 +70,7 @@ TEST(FemStaticSolver, PatchTestUniformDeformationIsReproducedExactly) {
     const double G[9] = {1.0 * scale, 0.3 * scale, -0.2 * scale, 0.1 * scale, -0.5 * scale, 0.2 * scale,
                          0.4 * scale, -0.1 * scale, 0.7 * scale};
     for (auto model : {FemMaterialModel::linear, FemMaterialModel::stvk, FemMaterialModel::neo_hookean}) {
-      const FemModel m = build_fem_model(box.nodes, box.tets, material(model));
+      const FemModel m = build_fem_model(box.nodes, box.tets, fem_material(model));
       auto exact = [&](int32_t i, int r) {
         return G[r * 3] * m.nodes[3 * i] + G[r * 3 + 1] * m.nodes[3 * i + 1] + G[r * 3 + 2] * m.nodes[3 * i + 2];
       };
@@ -104,7 +99,7 @@ TEST(FemStaticSolver, PatchTestUniformDeformationIsReproducedExactly) {
 double cantilever_error(int n, FemMaterialModel model, FemStaticReport* report = nullptr) {
   const double h = 2.0, L = 10 * h, E = 3e4;
   const auto box = fem_box_mesh({10 * n, n, n}, {L, h, h});
-  const FemModel m = build_fem_model(box.nodes, box.tets, material(model, E, 0.3));
+  const FemModel m = build_fem_model(box.nodes, box.tets, fem_material(model, E, 0.3));
   const double I = h * h * h * h / 12, delta = 1e-3 * L;  // small: linear regime
   const double P = delta * 3 * E * I / (L * L * L);
   FemBoundaryConditions bc;
@@ -156,7 +151,7 @@ TEST(FemStaticSolver, CantileverTipDeflectionConvergesToEulerBernoulli) {
 TEST(FemStaticSolver, NeoHookeanUniaxialStretchMatchesClosedForm) {
   const double L = 10, a = 1.3;
   const auto box = fem_box_mesh({3, 3, 3}, {L, L, L});
-  const FemModel m = build_fem_model(box.nodes, box.tets, material(FemMaterialModel::neo_hookean, 3e4, 0.4));
+  const FemModel m = build_fem_model(box.nodes, box.tets, fem_material(FemMaterialModel::neo_hookean, 3e4, 0.4));
   const double mu = m.lame.mu, lam = m.lame.lambda;
   double b = 1;
   for (int it = 0; it < 50; ++it) {
@@ -194,7 +189,7 @@ TEST(FemStaticSolver, NeoHookeanUniaxialStretchMatchesClosedForm) {
 
 TEST(FemStaticSolver, GrabWithLargeDisplacementConvergesAndBalances) {
   const auto box = fem_box_mesh({4, 4, 4}, {8, 8, 8});
-  const FemModel m = build_fem_model(box.nodes, box.tets, material(FemMaterialModel::neo_hookean, 3e4, 0.45));
+  const FemModel m = build_fem_model(box.nodes, box.tets, fem_material(FemMaterialModel::neo_hookean, 3e4, 0.45));
   FemBoundaryConditions bc;
   bc.fixed_nodes = nodes_where(m, 2, 0.0);
   for (int32_t i : nodes_where(m, 2, 8.0)) {  // pull the centre of the top face up and sideways
@@ -222,7 +217,7 @@ TEST(FemStaticSolver, GrabWithLargeDisplacementConvergesAndBalances) {
 
 TEST(FemStaticSolver, WarmStartFromANearbySolutionGivesTheSameEquilibriumInFewerIterations) {
   const auto box = fem_box_mesh({4, 4, 4}, {8, 8, 8});
-  const FemModel m = build_fem_model(box.nodes, box.tets, material(FemMaterialModel::neo_hookean, 3e4, 0.45));
+  const FemModel m = build_fem_model(box.nodes, box.tets, fem_material(FemMaterialModel::neo_hookean, 3e4, 0.45));
   FemBoundaryConditions bc;
   bc.fixed_nodes = nodes_where(m, 2, 0.0);
   const auto grab = [&](double up) {
@@ -264,7 +259,7 @@ TEST(FemStaticSolver, WarmStartFromANearbySolutionGivesTheSameEquilibriumInFewer
 
 TEST(FemStaticSolver, InexactNewtonReachesTheSameEquilibriumWithFewerCgIterations) {
   const auto box = fem_box_mesh({5, 5, 5}, {10, 10, 10});
-  const FemModel m = build_fem_model(box.nodes, box.tets, material(FemMaterialModel::neo_hookean, 3e4, 0.45));
+  const FemModel m = build_fem_model(box.nodes, box.tets, fem_material(FemMaterialModel::neo_hookean, 3e4, 0.45));
   FemBoundaryConditions bc;
   bc.fixed_nodes = nodes_where(m, 2, 0.0);
   for (int32_t i : nodes_where(m, 2, 10.0)) {
@@ -292,7 +287,7 @@ TEST(FemStaticSolver, InexactNewtonReachesTheSameEquilibriumWithFewerCgIteration
 
 TEST(FemStaticSolver, MissingOrInsufficientBoundaryConditionsAreInputErrors) {
   const auto box = fem_box_mesh({2, 2, 2}, {2, 2, 2});
-  const FemModel m = build_fem_model(box.nodes, box.tets, material(FemMaterialModel::linear));
+  const FemModel m = build_fem_model(box.nodes, box.tets, fem_material(FemMaterialModel::linear));
   FemLoads loads;
   loads.gravity = {0, 0, -9810};
   try {
@@ -340,7 +335,7 @@ TEST(FemStaticSolver, MissingOrInsufficientBoundaryConditionsAreInputErrors) {
 
 TEST(FemStaticSolver, BothPreconditionersGiveTheSameAnswer) {
   const auto box = fem_box_mesh({12, 3, 3}, {24, 6, 6});
-  const FemModel m = build_fem_model(box.nodes, box.tets, material(FemMaterialModel::neo_hookean));
+  const FemModel m = build_fem_model(box.nodes, box.tets, fem_material(FemMaterialModel::neo_hookean));
   FemBoundaryConditions bc;
   bc.fixed_nodes = nodes_where(m, 0, 0.0);
   FemLoads loads;
@@ -364,7 +359,7 @@ struct GrabbedCube {
 
 GrabbedCube grabbed_cube(FemMaterialModel law, double push = -1.5) {
   const auto box = fem_box_mesh({5, 5, 5}, {10, 10, 10});
-  GrabbedCube c{build_fem_model(box.nodes, box.tets, material(law, 3e4, 0.45)), {}};
+  GrabbedCube c{build_fem_model(box.nodes, box.tets, fem_material(law, 3e4, 0.45)), {}};
   c.bc.fixed_nodes = nodes_where(c.model, 2, 0.0);
   for (int32_t i : nodes_where(c.model, 2, 10.0)) {
     if (std::hypot(c.model.nodes[3 * i] - 5, c.model.nodes[3 * i + 1] - 5) > 2.1) continue;
@@ -372,12 +367,6 @@ GrabbedCube grabbed_cube(FemMaterialModel law, double push = -1.5) {
     c.bc.prescribed_displacements.insert(c.bc.prescribed_displacements.end(), {0.0, 0.0, push});
   }
   return c;
-}
-
-double largest_difference(const std::vector<double>& a, const std::vector<double>& b) {
-  double d = 0;
-  for (std::size_t i = 0; i < a.size(); ++i) d = std::max(d, std::abs(a[i] - b[i]));
-  return d;
 }
 
 TEST(FemStaticSolver, DirectAndIterativeSolvesAgree) {
@@ -394,7 +383,7 @@ TEST(FemStaticSolver, DirectAndIterativeSolvesAgree) {
     EXPECT_FALSE(b.report.direct);
     EXPECT_GE(a.report.factorizations, 1);
     EXPECT_GT(a.report.factor_bytes, 0);
-    EXPECT_LT(largest_difference(a.displacements, b.displacements), 1e-6);  // both at ||r|| <= 1e-8 r_ref
+    EXPECT_LT(max_abs_difference(a.displacements, b.displacements), 1e-6);  // both at ||r|| <= 1e-8 r_ref
   }
 }
 
@@ -409,7 +398,7 @@ TEST(FemStaticSolver, ToleranceInMillimetresStopsAtTheBudget) {
     EXPECT_LE(loose.report.newton_iterations, tight.report.newton_iterations);
     // The last full step moved nothing by more than the budget, and Newton converges fast from there:
     // the answer is within the budget of the tight one.
-    EXPECT_LT(largest_difference(loose.displacements, tight.displacements), mm) << mm;
+    EXPECT_LT(max_abs_difference(loose.displacements, tight.displacements), mm) << mm;
   }
   FemStaticOptions bad;
   bad.tolerance_mm = -1;
@@ -428,7 +417,7 @@ TEST(FemStaticSolver, IndefiniteTangentsAreProjectedAndNewtonStillConverges) {
   const auto b = solve_fem_static(pull.model, pull.bc, {}, always);
   ASSERT_TRUE(a.report.converged);
   ASSERT_TRUE(b.report.converged);
-  EXPECT_LT(largest_difference(a.displacements, b.displacements), 1e-6);
+  EXPECT_LT(max_abs_difference(a.displacements, b.displacements), 1e-6);
   // Projecting every element costs Newton its quadratic convergence where the exact tangent was fine.
   EXPECT_LE(a.report.newton_iterations, b.report.newton_iterations);
 }
@@ -446,7 +435,7 @@ TEST(FemStaticSolver, AKeptSolverReusesItsFactorAcrossSolves) {
     ASSERT_TRUE(r.report.converged);
     if (frame > 1) later_factorizations += r.report.factorizations;
     const auto fresh = solve_fem_static(c.model, c.bc, {}, o);
-    EXPECT_LT(largest_difference(r.displacements, fresh.displacements), 1e-6) << frame;
+    EXPECT_LT(max_abs_difference(r.displacements, fresh.displacements), 1e-6) << frame;
     u = r.displacements;
   }
   // The first solve factorised; later ones mostly precondition CG with a kept factor.
@@ -463,7 +452,7 @@ TEST(FemStaticSolver, ASingularPartOfTheMeshIsNamedByItsNode) {
   std::vector<int32_t> tets = a.tets;
   const int32_t offset = static_cast<int32_t>(a.nodes.size() / 3);
   for (const int32_t v : b.tets) tets.push_back(v + offset);
-  const FemModel m = build_fem_model(nodes, tets, material(FemMaterialModel::linear));
+  const FemModel m = build_fem_model(nodes, tets, fem_material(FemMaterialModel::linear));
   FemBoundaryConditions bc;
   for (int32_t i = 0; i < offset; ++i)
     if (m.nodes[3 * i + 2] == 0) bc.fixed_nodes.push_back(i);

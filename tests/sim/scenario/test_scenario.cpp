@@ -16,6 +16,16 @@ using ctsurg::sim::parse_scenario;
 
 namespace {
 
+// What parse_scenario says of `text` (read as /b/f.yaml): the InputError's message, or "(accepted)".
+std::string parse_error(const std::string& text) {
+  try {
+    (void)parse_scenario(text, "f.yaml", "/b");
+  } catch (const ctsurg::InputError& e) {
+    return e.what();
+  }
+  return "(accepted)";
+}
+
 const char* kFull = R"(
 ctsurg_scenario: 1
 name: grab test
@@ -175,21 +185,13 @@ TEST(Scenario, FemKindsAndTheirRules) {
   const auto describe = ctsurg::sim::describe_scenario(s);
   EXPECT_NE(describe.find("\"tetmesh\": \"/b/t.h5\""), std::string::npos) << describe;
   EXPECT_EQ(describe.find("\"grid\""), std::string::npos) << describe;
-  const auto error = [&](const std::string& text) {
-    try {
-      (void)parse_scenario(text, "f.yaml", "/b");
-    } catch (const ctsurg::InputError& e) {
-      return std::string(e.what());
-    }
-    return std::string("(accepted)");
-  };
-  EXPECT_NE(error(base + "tools:\n  - cut: {blade_edge_mm: [0, 0, 1], path: [{t: 0, position_mm: [0, 0, 0]}]}\n")
+  EXPECT_NE(parse_error(base + "tools:\n  - cut: {blade_edge_mm: [0, 0, 1], path: [{t: 0, position_mm: [0, 0, 0]}]}\n")
                 .find("f.yaml: tools[0]: cut needs a spring model"),
             std::string::npos);
-  EXPECT_NE(error(base + "tools:\n  - probe: {radius_mm: 2, path: [{t: 0, position_mm: [0, 0, 0]}]}\n").find("probe needs solver: dynamic"),
+  EXPECT_NE(parse_error(base + "tools:\n  - probe: {radius_mm: 2, path: [{t: 0, position_mm: [0, 0, 0]}]}\n").find("probe needs solver: dynamic"),
             std::string::npos);
-  EXPECT_NE(error(replaced(base, "  tetmesh: t.h5\n", "")).find("model.tetmesh: missing (kind: fem needs a tet mesh)"), std::string::npos);
-  EXPECT_NE(error(replaced(base, "kind: fem", "kind: spring_grid\n  grid: g.h5")).find("model.solver: only for kind: fem"),
+  EXPECT_NE(parse_error(replaced(base, "  tetmesh: t.h5\n", "")).find("model.tetmesh: missing (kind: fem needs a tet mesh)"), std::string::npos);
+  EXPECT_NE(parse_error(replaced(base, "kind: fem", "kind: spring_grid\n  grid: g.h5")).find("model.solver: only for kind: fem"),
             std::string::npos);
 }
 
@@ -210,16 +212,8 @@ TEST(Scenario, SolverSectionAxesAndTheNewFemModels) {
   EXPECT_EQ(s.solver.max_newton_iterations, 7);
   EXPECT_EQ(s.solver.max_cg_iterations, 300);
   EXPECT_NE(ctsurg::sim::describe_scenario(s).find("\"solver\": \"implicit\""), std::string::npos);
-  const auto error = [&](const std::string& text) {
-    try {
-      (void)parse_scenario(text, "f.yaml", "/b");
-    } catch (const ctsurg::InputError& e) {
-      return std::string(e.what());
-    }
-    return std::string("(accepted)");
-  };
   const auto expect_error = [&](const std::string& text, const std::string& part) {
-    const std::string e = error(text);
+    const std::string e = parse_error(text);
     EXPECT_NE(e.find(part), std::string::npos) << e;
   };
   expect_error(replaced(base, "axes: [z, x]", "axes: [z, w]"), "f.yaml: fixed[0].axes[1]");

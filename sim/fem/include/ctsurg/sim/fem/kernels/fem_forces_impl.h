@@ -20,17 +20,23 @@ struct FemElementView {
   int32_t order = 1;    // 1: tets #T x 4; 2: #T x 10 (quadratic; host only)
 };
 
-// Element e: its corner forces into corner_forces[12 e .. 12 e + 11]; false when inverted.
-template <class T>
-CTSURG_HD inline bool fem_element_force_pass(const FemElementView<T>& v, const T* u, int32_t e, T* corner_forces) {
-  T ue[12];
+// Element e's nodal displacements (N nodes: 4 for linear tets, 10 for quadratic) into ue[0 .. 3 N - 1].
+template <int N, class T>
+CTSURG_HD inline void fem_gather_element(const int32_t* tets, const T* u, int32_t e, T* ue) {
   CTSURG_UNROLL
-  for (int a = 0; a < 4; ++a) {
-    const int32_t n = v.tets[4 * e + a];
+  for (int a = 0; a < N; ++a) {
+    const int32_t n = tets[N * e + a];
     ue[3 * a] = u[3 * n];
     ue[3 * a + 1] = u[3 * n + 1];
     ue[3 * a + 2] = u[3 * n + 2];
   }
+}
+
+// Element e: its corner forces into corner_forces[12 e .. 12 e + 11]; false when inverted.
+template <class T>
+CTSURG_HD inline bool fem_element_force_pass(const FemElementView<T>& v, const T* u, int32_t e, T* corner_forces) {
+  T ue[12];
+  fem_gather_element<4>(v.tets, u, e, ue);
   return fem_element_forces(v.model, v.mu, v.lambda, ue, v.dm_inverse + 9 * e, v.volume[e], corner_forces + 12 * e);
 }
 
@@ -38,12 +44,7 @@ CTSURG_HD inline bool fem_element_force_pass(const FemElementView<T>& v, const T
 template <class T>
 CTSURG_HD inline bool fem_quadratic_element_force_pass(const FemElementView<T>& v, const T* u, int32_t e, T* slot_forces) {
   T ue[30];
-  for (int a = 0; a < 10; ++a) {
-    const int32_t n = v.tets[10 * e + a];
-    ue[3 * a] = u[3 * n];
-    ue[3 * a + 1] = u[3 * n + 1];
-    ue[3 * a + 2] = u[3 * n + 2];
-  }
+  fem_gather_element<10>(v.tets, u, e, ue);
   return fem_quadratic_element_forces(v.model, v.mu, v.lambda, ue, v.dm_inverse + 9 * e, v.volume[e], slot_forces + 30 * e);
 }
 
