@@ -233,20 +233,26 @@ int32_t FemNewton::forces(const std::vector<double>& u, double s, std::vector<do
     for (std::size_t d = 0; d < u.size(); ++d) out[d] -= terms_.mass * m_.node_mass[d / 3] * (u[d] - terms_.inertia_target[d]);
   }
   if (terms_.stiffness_damping != 0 && damping_ready_) {
-    // -c_b K_n (u - u_n), element by element (serial, in element order: deterministic).
-    for (int32_t e = 0; e < m_.tet_count(); ++e) {
-      const int32_t* v = &m_.tets[static_cast<std::size_t>(npe_) * e];
-      double w[30];
-      for (int c = 0; c < ne_; ++c) w[c] = u[3 * v[c / 3] + c % 3] - terms_.damping_origin[3 * v[c / 3] + c % 3];
-      const double* k = &kbuf_n_[static_cast<std::size_t>(ne_ * ne_) * e];
-      for (int r = 0; r < ne_; ++r) {
-        double kw = 0;
-        for (int c = 0; c < ne_; ++c) kw += k[ne_ * r + c] * w[c];
-        out[3 * v[r / 3] + r % 3] -= terms_.stiffness_damping * kw;
-      }
-    }
+    damping_product(u, damping_kw_);
+    for (std::size_t d = 0; d < u.size(); ++d) out[d] -= terms_.stiffness_damping * damping_kw_[d];
   }
   return inverted;
+}
+
+// K_n (u - u_n) from the kept element matrices (serial, in element order: deterministic).
+void FemNewton::damping_product(const std::vector<double>& u, std::vector<double>& kw) const {
+  kw.assign(u.size(), 0.0);
+  for (int32_t e = 0; e < m_.tet_count(); ++e) {
+    const int32_t* v = &m_.tets[static_cast<std::size_t>(npe_) * e];
+    double w[30];
+    for (int c = 0; c < ne_; ++c) w[c] = u[3 * v[c / 3] + c % 3] - terms_.damping_origin[3 * v[c / 3] + c % 3];
+    const double* k = &kbuf_n_[static_cast<std::size_t>(ne_ * ne_) * e];
+    for (int r = 0; r < ne_; ++r) {
+      double sum = 0;
+      for (int c = 0; c < ne_; ++c) sum += k[ne_ * r + c] * w[c];
+      kw[3 * v[r / 3] + r % 3] += sum;
+    }
+  }
 }
 
 double FemNewton::energy(const std::vector<double>& u, double s) {
@@ -260,18 +266,11 @@ double FemNewton::energy(const std::vector<double>& u, double s) {
       e += 0.5 * terms_.mass * m_.node_mass[d / 3] * g * g;
     }
   }
-  if (terms_.stiffness_damping != 0 && damping_ready_) {
-    const std::size_t ne2 = static_cast<std::size_t>(ne_ * ne_);
-    for (int32_t el = 0; el < m_.tet_count(); ++el) {
-      const int32_t* v = &m_.tets[static_cast<std::size_t>(npe_) * el];
-      double w[30];
-      for (int c = 0; c < ne_; ++c) w[c] = u[3 * v[c / 3] + c % 3] - terms_.damping_origin[3 * v[c / 3] + c % 3];
-      const double* k = &kbuf_n_[ne2 * el];
-      double wkw = 0;
-      for (int r = 0; r < ne_; ++r)
-        for (int c = 0; c < ne_; ++c) wkw += w[r] * k[ne_ * r + c] * w[c];
-      e += 0.5 * terms_.stiffness_damping * wkw;
-    }
+  if (terms_.stiffness_damping != 0 && damping_ready_) {  // c_b/2 (u - u_n) . K_n (u - u_n)
+    damping_product(u, damping_kw_);
+    double wkw = 0;
+    for (std::size_t d = 0; d < u.size(); ++d) wkw += (u[d] - terms_.damping_origin[d]) * damping_kw_[d];
+    e += 0.5 * terms_.stiffness_damping * wkw;
   }
   return e;
 }

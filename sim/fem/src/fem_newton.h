@@ -76,6 +76,8 @@ class FemNewton {
   // The potential whose negative gradient is forces(): strain energy - s f_ext . u + the terms'
   // (c_m/2 |u - y|_M^2 + c_b/2 |u - u_n|_{K_n}^2), nJ; +inf where an element is inverted.
   double energy(const std::vector<double>& u, double s);
+  // kw = K_n (u - u_n), the stiffness damping's product (#N x 3).
+  void damping_product(const std::vector<double>& u, std::vector<double>& kw) const;
 
   bool direct() const { return direct_; }
   int64_t factor_bytes() const;
@@ -100,7 +102,7 @@ class FemNewton {
   int threads_;
   double diag_ = 1;             // bounding-box diagonal, mm
   std::vector<uint8_t> held_;   // #N x 3
-  std::vector<double> target_, external_, corner_, forces_, all_forces_, kbuf_, kbuf_n_, element_energy_;
+  std::vector<double> target_, external_, corner_, forces_, all_forces_, kbuf_, kbuf_n_, element_energy_, damping_kw_;
   FemNewtonTerms terms_;
   FemElementView<double> el_{};
   int npe_ = 4, ne_ = 12;  // nodes and unknowns per element (quadratic: 10, 30)
