@@ -22,4 +22,5 @@ for r in runs:
         print(f"| {r['name']} | skipped: {r.get('error_message', '')} |" + " |" * len(counters))
         continue
     vals = [f"{r[c]:.4g}" if isinstance(r.get(c), (int, float)) else str(r.get(c, "")) for c in counters]
-    print(f"| {r['name']} | {r['real_time']:.3g} {r['time_unit']} | " + " | ".join(vals) + " |")
+    name = f"{r['name']} ({r['label']})" if r.get("label") else r["name"]
+    print(f"| {name} | {r['real_time']:.3g} {r['time_unit']} | " + " | ".join(vals) + " |")

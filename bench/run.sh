@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Reruns every benchmark with one command and rewrites docs/benchmarks.md (machine and date included).
 #   bench/run.sh                 build (Release) if needed, then run every section
-#   bench/run.sh render fem      only these sections (preprocess tetmesh surface sim render fem kidney accuracy);
+#   bench/run.sh render fem      only these sections (preprocess tetmesh surface sim render fem instruments kidney accuracy);
 #                                the others in docs/benchmarks.md stay as they are
 #   BUILD=build-dev bench/run.sh fem        an existing build folder (brought up to date) instead of the release preset
 #   TVE_OUT=DIR bench/run.sh accuracy       the tables of a finished bench/time_vs_error.sh run in DIR, not a new run
@@ -290,6 +290,26 @@ if want fem; then
     "$BIN/bench_sparse_factorisation" --benchmark_format=json 2>/dev/null | gbench_table
   } >"$fem"
   splice fem "$fem"
+fi
+
+# Instruments: bench_instruments (the distance grid's bake, the heart step with each instrument against
+# the sphere probe, the contact pass alone).
+if want instruments; then
+  ins=$WORK/instruments.md
+  {
+    echo "## Instruments: rigid meshes pushing the tissue (\`bench/run.sh instruments\`)"
+    echo
+    machine_line
+    echo "date: $(date -u +%Y-%m-%d); ctsurg $(git describe --always --dirty 2>/dev/null || echo unknown), Release build."
+    echo "\`build/bin/bench_instruments\` (docs/sim.md, \"Instruments\"): BM_Bake/k loads bundled instrument k and bakes its"
+    echo "signed distance grid (once per run); BM_HeartStep/tool/threads is one step of the heart's 2.4 mm spring grid with"
+    echo "no tool (0), the 5 mm sphere probe (1) or instrument k (2 + k) pressed 6 mm into the anterior wall (in_contact:"
+    echo "particles it pushed when placed); BM_PushOut/N/threads is the contact pass alone over N particles spread through"
+    echo "the retractor's box. Load average at the start: $(cut -d' ' -f1-3 /proc/loadavg)."
+    echo
+    "$BIN/bench_instruments" --benchmark_format=json 2>/dev/null | gbench_table
+  } >"$ins"
+  splice instruments "$ins"
 fi
 
 # The FEM paper's kidney experiment (bench/kidney_experiment.sh; needs ../shared/data/abdomen).

@@ -20,7 +20,8 @@ endif()
 if(CTSURG_BUILD_BENCH)
   find_package(benchmark REQUIRED)
 endif()
-# Assimp only for exporting surfaces to glTF/OBJ/STL/PLY, confined to mesh/src/surface_export.cpp.
+# Assimp for exporting surfaces to glTF/OBJ/STL/PLY (mesh/src/surface_export.cpp) and reading the instruments'
+# triangle meshes (core/src/triangle_mesh_file.cpp, in a child process), confined to those two files.
 find_package(assimp 5.2 REQUIRED)
 # A library that ships no CMake package, found by its header and library and imported as TARGET:
 #   ctsurg_import_library(TARGET PREFIX HEADER LIBRARY DEBIAN_PACKAGE [PATH_SUFFIXES folder...])

@@ -80,7 +80,8 @@ def main():
              f"# model: {d.get('model')}" + (f" ({d.get('material_law')}, {d.get('solver')})" if d.get("model") == "fem" else ""),
              f"{key}.scenario.{stem} := {traj}"]
     targets = [traj]
-    prereqs = " ".join(inputs[k] for k in ("grid", "tetmesh", "surface") if k in inputs)
+    prereqs = " ".join([inputs[k] for k in ("grid", "tetmesh", "surface") if k in inputs]
+                       + [q(os.path.abspath(m)) for m in d.get("instruments", [])])  # instrument meshes: source files
     opts = " ".join(f"--{k} {q(inputs[k])}" for k in ("grid", "tetmesh", "surface") if k in inputs)
     lines += [f"{traj} {xdmf} &: {sc} {prereqs} $(BIN)/ctsurg-sim",
               f"\t$(BIN)/ctsurg-sim -q {q(sc)} {opts} -o {q(traj)} $({key}.SIM_ARGS)"]

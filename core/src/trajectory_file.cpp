@@ -6,6 +6,7 @@
 #include "ctsurg/core/hdf5_file.h"
 
 #include <array>
+#include <cmath>
 #include <sstream>
 
 namespace ctsurg {
@@ -136,6 +137,26 @@ void validate_trajectory(const Trajectory& t, const std::string& file) {
     throw InputError(file, "/trajectory/tools/spheres", "expected (F, S, 4) with S = the number of sphere kinds");
   }
   if (t.blades.size() % (nf * 7) != 0) throw InputError(file, "/trajectory/tools/blades", "expected (F, B, 7)");
+  for (size_t k = 0; k < t.instruments.size(); ++k) {
+    const TrajectoryInstrument& ins = t.instruments[k];
+    const std::string where = "/trajectory/tools/instruments/" + std::to_string(k);
+    if (ins.vertices.empty() || ins.vertices.size() % 3 != 0) throw InputError(file, where + "/vertices", "expected (V, 3) with V > 0");
+    if (ins.triangles.empty() || ins.triangles.size() % 3 != 0) throw InputError(file, where + "/triangles", "expected (T, 3) with T > 0");
+    for (const uint32_t v : ins.triangles) {
+      if (v >= ins.vertices.size() / 3) throw InputError(file, where + "/triangles", "vertex id " + std::to_string(v) + " out of range");
+    }
+    require_finite(ins.vertices, 3, file, where + "/vertices");
+  }
+  if (t.instrument_poses.size() != nf * t.instruments.size() * 8) {
+    throw InputError(file, "/trajectory/tools/instrument_poses", "expected (F, I, 8) with I = the number of instruments");
+  }
+  require_finite(t.instrument_poses, 8, file, "/trajectory/tools/instrument_poses");
+  for (size_t r = 0; r < t.instrument_poses.size(); r += 8) {
+    const double* p = &t.instrument_poses[r];
+    if (std::abs(p[1] * p[1] + p[2] * p[2] + p[3] * p[3] + p[4] * p[4] - 1) > 1e-6) {
+      throw InputError(file, "/trajectory/tools/instrument_poses", "row " + std::to_string(r / 8) + ": the rotation is not a unit quaternion");
+    }
+  }
   if (t.rest_particles.size() % 3 != 0 || t.particles.size() != nf * t.rest_particles.size()) {
     throw InputError(file, "/trajectory/particles", "expected rest_positions (P, 3) and positions (F, P, 3)");
   }
@@ -197,6 +218,17 @@ void write_trajectory_file(const std::filesystem::path& path, const Trajectory& 
         const std::array<uint64_t, 3> s4{nf, ns, 4}, b7{nf, nb, 7};
         tools.write_dataset("spheres", t.spheres, s4);
         tools.write_dataset("blades", t.blades, b7);
+        if (!t.instruments.empty()) {
+          h5::Group ig = tools.create_group("instruments");
+          for (size_t k = 0; k < t.instruments.size(); ++k) {
+            const TrajectoryInstrument& ins = t.instruments[k];
+            h5::Group one = ig.create_group(std::to_string(k));
+            one.set_attribute("name", ins.name);
+            one.write_dataset("vertices", ins.vertices, std::array<uint64_t, 2>{ins.vertices.size() / 3, 3});
+            one.write_dataset("triangles", ins.triangles, std::array<uint64_t, 2>{ins.triangles.size() / 3, 3});
+          }
+          tools.write_dataset("instrument_poses", t.instrument_poses, std::array<uint64_t, 3>{nf, t.instruments.size(), 8});
+        }
         if (np > 0) {
           h5::Group p = g.create_group("particles");
           const std::array<uint64_t, 2> p3{np, 3};
@@ -260,6 +292,22 @@ Trajectory read_trajectory_file(const std::filesystem::path& path) {
   expect(tools, "spheres", {nf, static_cast<int64_t>(t.sphere_kinds.size()), 4});
   t.blades = tools.read_dataset<double>("blades", &shape);
   expect(tools, "blades", {nf, -1, 7});
+  if (tools.has("instruments")) {
+    const h5::Group ig = tools.open_group("instruments");
+    for (int64_t k = 0; ig.has(std::to_string(k)); ++k) {
+      if (k >= 1024) throw InputError(file, "/trajectory/tools/instruments", "more than 1024 instruments");
+      const h5::Group one = ig.open_group(std::to_string(k));
+      TrajectoryInstrument ins;
+      ins.name = one.string_attribute("name");
+      ins.vertices = one.read_dataset<float>("vertices", &shape);
+      expect(one, "vertices", {-1, 3});
+      ins.triangles = one.read_dataset<uint32_t>("triangles", &shape);
+      expect(one, "triangles", {-1, 3});
+      t.instruments.push_back(std::move(ins));
+    }
+    t.instrument_poses = tools.read_dataset<double>("instrument_poses", &shape);
+    expect(tools, "instrument_poses", {nf, static_cast<int64_t>(t.instruments.size()), 8});
+  }
   if (g.has("particles")) {
     const h5::Group p = g.open_group("particles");
     t.rest_particles = p.read_dataset<float>("rest_positions", &shape);

@@ -1,5 +1,7 @@
 #include "ctsurg/render/scene_frame.h"
 
+#include <Eigen/Geometry>
+
 #include <cmath>
 
 #include "ctsurg/core/error.h"
@@ -32,6 +34,27 @@ SceneFrame trajectory_scene_frame(const Trajectory& trajectory, int64_t f) {
     const double* q = trajectory.blades.data() + 7 * (f * n_blades + i);
     if (q[6] == 0.0) continue;
     s.blades.push_back({{float(q[0]), float(q[1]), float(q[2])}, {float(q[3]), float(q[4]), float(q[5])}});
+  }
+  const size_t n_instruments = trajectory.instruments.size();
+  for (size_t k = 0; k < n_instruments; ++k) {
+    const double* pose = trajectory.instrument_poses.data() + 8 * (static_cast<size_t>(f) * n_instruments + k);
+    if (pose[0] == 0.0) continue;
+    const Eigen::Quaterniond q(pose[1], pose[2], pose[3], pose[4]);
+    const Eigen::Matrix3d r = q.normalized().toRotationMatrix();
+    const Eigen::Vector3d c(pose[5], pose[6], pose[7]);
+    const TrajectoryInstrument& ins = trajectory.instruments[k];
+    const auto corner = [&](uint32_t v) {
+      return Eigen::Vector3d(r * Eigen::Vector3d(ins.vertices[3 * v], ins.vertices[3 * v + 1], ins.vertices[3 * v + 2]) + c);
+    };
+    for (size_t t = 0; t < ins.triangles.size(); t += 3) {
+      const Eigen::Vector3d a = corner(ins.triangles[t]), b = corner(ins.triangles[t + 1]), d = corner(ins.triangles[t + 2]);
+      Eigen::Vector3d n = (b - a).cross(d - a);
+      n = n.norm() > 0 ? Eigen::Vector3d(n.normalized()) : Eigen::Vector3d::UnitZ();
+      for (const Eigen::Vector3d* p : {&a, &b, &d}) {
+        s.instrument_triangles.insert(s.instrument_triangles.end(), {float(p->x()), float(p->y()), float(p->z()), float(n.x()),
+                                                                      float(n.y()), float(n.z())});
+      }
+    }
   }
   return s;
 }

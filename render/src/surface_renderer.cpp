@@ -442,7 +442,7 @@ void SurfaceRenderer::draw(const SceneFrame& frame, const Camera& camera, const 
   glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, ib->second.buffer);
   glDrawElements(GL_TRIANGLES, ib->second.count, GL_UNSIGNED_INT, nullptr);
 
-  if (style.tools && (!frame.spheres.empty() || !frame.blades.empty())) {
+  if (style.tools && (!frame.spheres.empty() || !frame.blades.empty() || !frame.instrument_triangles.empty())) {
     // Translucent tools over the opaque surface: blended, depth-tested, not writing depth.
     const GLuint q = s.tool_program;
     glUseProgram(q);
@@ -497,6 +497,22 @@ void SurfaceRenderer::draw(const SceneFrame& frame, const Camera& camera, const 
       glUniform3fv(glGetUniformLocation(q, "u_centre"), 1, zero);
       glUniform1f(glGetUniformLocation(q, "u_scale"), 1.0f);
       glDrawArrays(GL_TRIANGLES, 0, static_cast<GLsizei>(quads.size() / 6));
+    }
+    if (!frame.instrument_triangles.empty()) {
+      // Instruments: steel, nearly opaque, their back faces culled (closed meshes wound outwards).
+      glEnable(GL_CULL_FACE);
+      glCullFace(GL_BACK);
+      glBindVertexArray(s.blade_vao);
+      glBindBuffer(GL_ARRAY_BUFFER, s.blade_vbo);
+      glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(frame.instrument_triangles.size() * sizeof(float)),
+                   frame.instrument_triangles.data(), GL_STREAM_DRAW);
+      const float steel[4] = {0.72f, 0.74f, 0.78f, 0.85f};
+      const float zero[3] = {0.0f, 0.0f, 0.0f};
+      glUniform4fv(glGetUniformLocation(q, "u_colour"), 1, steel);
+      glUniform3fv(glGetUniformLocation(q, "u_centre"), 1, zero);
+      glUniform1f(glGetUniformLocation(q, "u_scale"), 1.0f);
+      glDrawArrays(GL_TRIANGLES, 0, static_cast<GLsizei>(frame.instrument_triangles.size() / 6));
+      glDisable(GL_CULL_FACE);
     }
     glDepthMask(GL_TRUE);
     glDisable(GL_BLEND);

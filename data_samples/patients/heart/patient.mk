@@ -9,4 +9,5 @@ GRID_ARGS := --label-names 1=heart
 # a static Neo-Hookean frame then takes about 0.8 s). The rendered surface stays the full-resolution one.
 TETMESH_ARGS := --cell-size 6
 SCENARIOS := ../../scenarios/heart_grab.yaml ../../scenarios/heart_cut.yaml ../../scenarios/heart_probe.yaml \
-             ../../scenarios/heart_explicit_grab.yaml ../../scenarios/heart_fem_grab.yaml
+             ../../scenarios/heart_explicit_grab.yaml ../../scenarios/heart_fem_grab.yaml \
+             ../../scenarios/heart_retract.yaml

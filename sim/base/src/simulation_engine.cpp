@@ -8,6 +8,7 @@ const char* to_string(ToolKind kind) {
     case ToolKind::probe: return "probe";
     case ToolKind::cut: return "cut";
     case ToolKind::force: return "force";
+    case ToolKind::instrument: return "instrument";
   }
   return "?";
 }

@@ -3,6 +3,7 @@
 
 #include "ctsurg/sim/fem/kernels/fem_explicit_step_impl.h"
 #include "ctsurg/sim/fem/kernels/fem_forces_impl.h"
+#include "ctsurg/sim/base/kernels/instrument_contact_impl.h"
 
 #include <cstdint>
 
@@ -34,5 +35,9 @@ int32_t fem_explicit_step(const FemElementView<Real>& elements, const FemNodeVie
 // how many moved.
 int64_t fem_sphere_contact(Real* u, const double* rest, const Real* inv_mass, int32_t nodes, const FemSphereView& sphere,
                            int threads);
+// Instrument contact (base/kernels/instrument_contact_impl.h): free nodes inside it projected out; returns
+// how many moved.
+int64_t fem_instrument_contact(Real* u, const double* rest, const Real* inv_mass, int32_t nodes, const InstrumentView& instrument,
+                               int threads);
 
 }  // namespace ctsurg::sim::cpu

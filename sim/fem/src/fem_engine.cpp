@@ -153,9 +153,10 @@ double FemEngine::time() const { return dynamics_ ? dynamics_->time() : implicit
 void FemEngine::check_tools(const std::vector<ToolInput>& tools) const {
   for (const ToolInput& tool : tools) {
     if (tool.kind == ToolKind::cut) throw InputError(options_.where, tool.label, "the FEM models do not cut; use a spring model");
-    if (tool.kind == ToolKind::probe && !dynamics_) {
+    if ((tool.kind == ToolKind::probe || tool.kind == ToolKind::instrument) && !dynamics_) {
       throw InputError(options_.where, tool.label,
-                       "probe needs solver: dynamic (contact is part of the explicit dynamics only, not of the static or implicit solvers)");
+                       std::string(to_string(tool.kind)) +
+                           " needs solver: dynamic (contact is part of the explicit dynamics only, not of the static or implicit solvers)");
     }
   }
 }
@@ -185,6 +186,13 @@ StabilityReport FemEngine::step(const std::vector<ToolInput>& tools, int steps) 
     }
   }
   dynamics_->set_contact_sphere(centre, radius);
+  instrument_views_.clear();
+  for (const ToolInput& tool : tools) {
+    if (tool.kind != ToolKind::instrument || !tool.active) continue;
+    if (!tool.instrument) throw InputError(options_.where, tool.label, "the instrument has no shape");
+    instrument_views_.push_back(instrument_view(*tool.instrument, tool.orientation, tool.centre));
+  }
+  dynamics_->set_contact_instruments(instrument_views_);
   if (holds_.update_forces(tools, u_, false)) dynamics_->set_external_forces(holds_.nodal_forces());
   try {
     dynamics_->step(steps);

@@ -208,6 +208,18 @@ void FemExplicitDynamics::set_contact_sphere(const std::array<double, 3>& centre
   if (device_) device_->set_contact_sphere(FemSphereView{sphere_[0], sphere_[1], sphere_[2], sphere_[3]});
 }
 
+void FemExplicitDynamics::set_contact_instruments(const std::vector<InstrumentView>& instruments) {
+  if (device_ && !instruments.empty()) {
+    throw InputError(kWhere, "instruments", "instrument contact runs on the cpu backend only; set backend: cpu");
+  }
+  for (const InstrumentView& v : instruments) {
+    if (v.phi == nullptr || v.nx < 2 || v.ny < 2 || v.nz < 2 || !(v.spacing > 0)) {
+      throw InputError(kWhere, "instruments", "an instrument's distance grid is empty");
+    }
+  }
+  instruments_ = instruments;
+}
+
 void FemExplicitDynamics::step(int steps) {
   if (steps < 0) throw InputError(kWhere, "steps", "must be >= 0");
   if (device_) return step_on_device(steps);
@@ -227,6 +239,9 @@ void FemExplicitDynamics::step(int steps) {
     if (sphere_[3] > 0)
       contacts_ = cpu::fem_sphere_contact(u_next_.data(), model_.nodes.data(), inv_mass_.data(), model_.node_count(),
                                           FemSphereView{sphere_[0], sphere_[1], sphere_[2], sphere_[3]}, options_.threads);
+    for (const InstrumentView& v : instruments_)
+      contacts_ += cpu::fem_instrument_contact(u_next_.data(), model_.nodes.data(), inv_mass_.data(), model_.node_count(), v,
+                                               options_.threads);
     u_prev_.swap(u_);
     u_.swap(u_next_);
     time_ += dt_;

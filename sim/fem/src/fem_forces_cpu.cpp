@@ -160,4 +160,13 @@ int64_t fem_sphere_contact(Real* u, const double* rest, const Real* inv_mass, in
   return moved;
 }
 
+int64_t fem_instrument_contact(Real* u, const double* rest, const Real* inv_mass, int32_t nodes, const InstrumentView& instrument,
+                               int threads) {
+  const int t = thread_count(threads, nodes);
+  int64_t moved = 0;
+#pragma omp parallel for schedule(static) num_threads(t) reduction(+ : moved)
+  for (int32_t i = 0; i < nodes; ++i) moved += push_node_out_of_instrument(instrument, u, rest, inv_mass, i);
+  return moved;
+}
+
 }  // namespace ctsurg::sim::cpu

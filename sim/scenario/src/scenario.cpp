@@ -45,24 +45,44 @@ PointSpec point_of(const YamlField& f, bool offset_allowed) {
   return p;
 }
 
-ToolAction tool_of(const YamlField& item) {
-  if (!item.is_map()) item.fail("expected one of grab:, probe:, cut: with the tool's fields under it");
+// A keyframe's orientation: quaternion: [w, x, y, z] or rotation: {axis: [x, y, z], angle_deg: a}.
+std::optional<Quaternion> rotation_of(const YamlField& key) {
+  if (key.has("quaternion") && key.has("rotation")) key.fail("give one of quaternion, rotation");
+  if (key.has("quaternion")) {
+    const YamlField q = key.child("quaternion");
+    const auto items = q.items();
+    if (items.size() != 4) q.fail("expected [w, x, y, z]");
+    Quaternion v{};
+    for (size_t i = 0; i < 4; ++i) v[i] = items[i].number();
+    return checked_rotation(v, q.file(), q.path());
+  }
+  if (key.has("rotation")) {
+    const YamlField r = key.child("rotation");
+    r.only({"axis", "angle_deg"});
+    return axis_angle_rotation(r.child("axis").vec3(), r.child("angle_deg").number(), r.file(), r.path());
+  }
+  return std::nullopt;
+}
+
+ToolAction tool_of(const YamlField& item, const fs::path& base_dir) {
+  if (!item.is_map()) item.fail("expected one of grab:, probe:, cut:, force:, instrument: with the tool's fields under it");
   int kinds = 0;
   ToolAction t;
   std::string key;
-  for (const char* k : {"grab", "probe", "cut", "force"}) {
+  for (const char* k : {"grab", "probe", "cut", "force", "instrument"}) {
     if (item.has(k)) {
       ++kinds;
       key = k;
     }
   }
-  item.only({"grab", "probe", "cut", "force"});
-  if (kinds != 1) item.fail("each tool is exactly one of grab:, probe:, cut:, force:");
+  item.only({"grab", "probe", "cut", "force", "instrument"});
+  if (kinds != 1) item.fail("each tool is exactly one of grab:, probe:, cut:, force:, instrument:");
   const YamlField f = item.child(key);
   t.kind = key == "grab"    ? ToolKind::grab
            : key == "probe" ? ToolKind::probe
            : key == "cut"   ? ToolKind::cut
-                            : ToolKind::force;
+           : key == "force" ? ToolKind::force
+                            : ToolKind::instrument;
   t.label = item.path() + " (" + key + ")";
   if (t.kind == ToolKind::cut) {
     f.only({"start_s", "end_s", "path", "blade_edge_mm", "snap_to_tissue"});
@@ -72,6 +92,12 @@ ToolAction tool_of(const YamlField& item) {
     f.only({"start_s", "end_s", "path", "radius_mm", "force_n", "snap_to_tissue"});
     t.radius_mm = f.child("radius_mm").positive();
     t.force_n = f.child("force_n").vec3();
+  } else if (t.kind == ToolKind::instrument) {
+    f.only({"start_s", "end_s", "path", "mesh", "grid_spacing_mm", "snap_to_tissue"});
+    const std::string mesh = f.child("mesh").text();
+    if (mesh.empty()) f.child("mesh").fail("must name a .stl, .obj or .ply file");
+    t.instrument_mesh = resolve(base_dir, mesh);
+    if (f.has("grid_spacing_mm")) t.instrument_spacing_mm = f.child("grid_spacing_mm").positive();
   } else {
     f.only({"start_s", "end_s", "path", "radius_mm", "snap_to_tissue"});
     t.radius_mm = f.child("radius_mm").positive();
@@ -79,11 +105,16 @@ ToolAction tool_of(const YamlField& item) {
   const auto keys = f.child("path").items();
   if (keys.empty()) f.child("path").fail("needs at least one keyframe");
   for (size_t i = 0; i < keys.size(); ++i) {
-    keys[i].only({"t", "position_mm", "at_fraction", "offset_mm"});
+    if (t.kind == ToolKind::instrument) {
+      keys[i].only({"t", "position_mm", "at_fraction", "offset_mm", "quaternion", "rotation"});
+    } else {
+      keys[i].only({"t", "position_mm", "at_fraction", "offset_mm"});
+    }
     Keyframe k;
     k.t = keys[i].child("t").non_negative();
     if (i > 0 && !(k.t > t.path.back().t)) keys[i].child("t").fail("keyframe times must increase");
     k.point = point_of(keys[i], i > 0);
+    k.rotation = rotation_of(keys[i]);
     t.path.push_back(k);
   }
   t.start_s = f.has("start_s") ? f.child("start_s").non_negative() : t.path.front().t;
@@ -181,6 +212,11 @@ std::string describe_scenario(const Scenario& s) {
   if (read.tetmesh) inputs["tetmesh"] = s.tetmesh.string();
   if (read.surface) inputs["surface"] = s.surface.string();
   j["inputs"] = inputs;
+  nlohmann::json instruments = nlohmann::json::array();  // files the run reads besides the stage outputs
+  for (const auto& tool : s.tools) {
+    if (tool.kind == ToolKind::instrument) instruments.push_back(tool.instrument_mesh.string());
+  }
+  j["instruments"] = instruments;
   j["trajectory"] = s.trajectory.string();
   nlohmann::json render = nlohmann::json::array();
   for (const auto& r : s.render) {
@@ -281,14 +317,16 @@ static Scenario parse_fields(const std::string& text, const fs::path& file, cons
   }
   if (top.has("tools")) {
     for (const auto& item : top.child("tools").items()) {
-      s.tools.push_back(tool_of(item));
+      s.tools.push_back(tool_of(item, base_dir));
       // FEM tools: grab (prescribed displacements) and probe (sphere contact, dynamic only); cutting
       // a tet mesh is not implemented (the spring models cut).
       if (s.model == ModelKind::fem && s.tools.back().kind == ToolKind::cut) {
         item.fail("cut needs a spring model (kind: spring_grid or explicit_springs); the FEM models do not cut");
       }
-      if (s.model == ModelKind::fem && s.fem_solver != FemSolver::dynamic && s.tools.back().kind == ToolKind::probe) {
-        item.fail("probe needs solver: dynamic (contact is part of the explicit dynamics only, not of the static or implicit solvers)");
+      if (s.model == ModelKind::fem && s.fem_solver != FemSolver::dynamic &&
+          (s.tools.back().kind == ToolKind::probe || s.tools.back().kind == ToolKind::instrument)) {
+        item.fail(std::string(to_string(s.tools.back().kind)) +
+                  " needs solver: dynamic (contact is part of the explicit dynamics only, not of the static or implicit solvers)");
       }
     }
   }

@@ -161,6 +161,10 @@ ScenarioEngine spring_engine(const Scenario& s, Backend backend, const std::func
   if (backend == Backend::cuda) {
     for (const auto& t : s.tools) {
       if (t.kind == ToolKind::force) throw InputError(sfile, t.label, "force tools run on the cpu backend only; set backend: cpu");
+      if (t.kind == ToolKind::instrument) {
+        throw InputError(sfile, t.label, "instruments run on the cpu backend only for spring models (the contact kernel is "
+                                         "written for CUDA, its device launch is not yet); set backend: cpu");
+      }
     }
   }
   EngineOptions o = engine_options(s, note);

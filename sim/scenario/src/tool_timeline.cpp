@@ -21,6 +21,13 @@ Vec3 ToolTimeline::Path::at(double time) const {
           p[k - 1][2] + a * (p[k][2] - p[k - 1][2])};
 }
 
+Quaternion ToolTimeline::Path::rotation_at(double time) const {
+  if (time <= t.front()) return r.front();
+  if (time >= t.back()) return r.back();
+  const size_t k = static_cast<size_t>(std::upper_bound(t.begin(), t.end(), time) - t.begin());
+  return slerp(r[k - 1], r[k], (time - t[k - 1]) / (t[k] - t[k - 1]));
+}
+
 ToolTimeline::ToolTimeline(const std::vector<ToolAction>& tools, const std::vector<double>& rest, const Vec3& origin,
                            const std::function<void(const std::string&)>& note) {
   const RestBounds bounds = bounds_of(rest);
@@ -35,7 +42,9 @@ ToolTimeline::ToolTimeline(const std::vector<ToolAction>& tools, const std::vect
       if (k.point.kind == PointSpec::Kind::offset_mm) p = {r.p.front()[0] + p[0], r.p.front()[1] + p[1], r.p.front()[2] + p[2]};
       r.t.push_back(k.t);
       r.p.push_back(p);
+      r.r.push_back(k.rotation ? *k.rotation : r.r.empty() ? kIdentityRotation : r.r.back());
     }
+    if (spec.kind == ToolKind::instrument) tool.instrument = load_instrument(spec.instrument_mesh, spec.instrument_spacing_mm, note);
     if (spec.snap_to_tissue) {
       // The nearest rest particle to the first keyframe (lowest id on ties): the whole path moves by the
       // difference, so the tool starts on tissue whatever the bounding box looks like.
@@ -57,6 +66,8 @@ ToolTimeline::ToolTimeline(const std::vector<ToolAction>& tools, const std::vect
 }
 
 Vec3 ToolTimeline::position(size_t i, double t) const { return tools_[i].path.at(t); }
+
+Quaternion ToolTimeline::orientation(size_t i, double t) const { return tools_[i].path.rotation_at(t); }
 
 bool ToolTimeline::active(size_t i, double t) const {
   const ToolAction& spec = tools_[i].spec;
@@ -86,6 +97,8 @@ void ToolTimeline::inputs(double t0, double t1, double min_sweep_mm, std::vector
     in.start_s = spec.start_s;
     in.start_centre = tool.path.at(spec.start_s);
     in.sweeps.clear();
+    in.instrument = tool.instrument;
+    in.orientation = tool.path.rotation_at(t1);
     if (spec.kind == ToolKind::cut) sweeps(tool, t0, t1, min_sweep_mm, in.sweeps);
   }
 }

@@ -43,6 +43,13 @@ TrajectoryRecorder::TrajectoryRecorder(const Scenario& s, const SimulationEngine
   for (size_t i = 0; i < timeline.size(); ++i) {
     if (timeline.tool(i).kind == ToolKind::cut) {
       ++blades_;
+    } else if (timeline.tool(i).kind == ToolKind::instrument) {
+      const Instrument& shape = *timeline.instrument(i);
+      TrajectoryInstrument ins;
+      ins.name = timeline.tool(i).instrument_mesh.string();
+      ins.vertices.assign(shape.mesh.vertices.begin(), shape.mesh.vertices.end());
+      ins.triangles = shape.mesh.faces;
+      traj_.instruments.push_back(std::move(ins));
     } else {
       traj_.sphere_kinds.push_back(to_string(timeline.tool(i).kind));
     }
@@ -91,6 +98,12 @@ void TrajectoryRecorder::record(SimulationEngine& engine, const ToolTimeline& ti
     const ToolAction& tool = timeline.tool(i);
     if (tool.kind == ToolKind::cut) continue;
     const Vec3 l = timeline.position(i, t), c{l[0] + origin_[0], l[1] + origin_[1], l[2] + origin_[2]};
+    if (tool.kind == ToolKind::instrument) {
+      const Quaternion q = timeline.orientation(i, t);
+      traj_.instrument_poses.insert(traj_.instrument_poses.end(),
+                                    {timeline.active(i, t) ? 1.0 : 0.0, q[0], q[1], q[2], q[3], c[0], c[1], c[2]});
+      continue;
+    }
     const bool on = timeline.active(i, t) && (tool.kind == ToolKind::probe || engine.engaged(i));
     traj_.spheres.insert(traj_.spheres.end(), {c[0], c[1], c[2], on ? tool.radius_mm : 0.0});
   }
@@ -114,6 +127,7 @@ void TrajectoryRecorder::truncate(size_t frames) {
   for (auto& m : metrics_) m.values.resize(frames);
   traj_.spheres.resize(frames * traj_.sphere_kinds.size() * 4);
   traj_.blades.resize(frames * blades_ * 7);
+  traj_.instrument_poses.resize(frames * traj_.instruments.size() * 8);
 }
 
 Trajectory TrajectoryRecorder::finish(double dt) {

@@ -20,6 +20,7 @@ class YamlField {
   YamlField(YAML::Node node, std::string path, const std::string* file);
 
   const std::string& path() const { return path_; }
+  const std::string& file() const { return *file_; }  // the document's name in messages
   // Throws InputError(file, path, problem).
   [[noreturn]] void fail(const std::string& problem) const;
   bool is_map() const { return node_.IsMap(); }

@@ -13,6 +13,7 @@
 namespace ctsurg::sim {
 struct TriangleView;
 struct SphereView;
+struct InstrumentView;
 }
 
 namespace ctsurg::sim::cpu {
@@ -35,5 +36,8 @@ void grabbable(const Real* x, const Real* y, const Real* z, const Real* inv_mass
 int64_t probe(Real* x, Real* y, Real* z, const Real* inv_mass, int32_t count, const SphereView& tool, int threads);
 void place_grabbed(Real* x, Real* y, Real* z, const int32_t* ids, const Real* offsets, int64_t count,
                    const SphereView& tool, int threads);
+
+// Instruments: projects the free particles out; returns how many moved.
+int64_t push_out(Real* x, Real* y, Real* z, const Real* inv_mass, int32_t count, const InstrumentView& view, int threads);
 
 }  // namespace ctsurg::sim::cpu

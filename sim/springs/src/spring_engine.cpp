@@ -214,6 +214,12 @@ void SpringEngine::apply_tools(const std::vector<ToolInput>& tools) {
       case ToolKind::probe:
         if (tool.active) tool_work_ |= stepper_->probe({tool.centre, tool.radius_mm}) > 0;
         break;
+      case ToolKind::instrument:
+        if (tool.active) {
+          if (!tool.instrument) throw InputError(options_.where, tool.label, "the instrument has no shape");
+          tool_work_ |= stepper_->push_out(instrument_view(*tool.instrument, tool.orientation, tool.centre)) > 0;
+        }
+        break;
       case ToolKind::cut:
         for (const auto& [from, to] : tool.sweeps) {
           sweep_blade(tool, from, to);

@@ -5,9 +5,11 @@
 // changed it.
 #pragma once
 
+#include "ctsurg/core/error.h"
 #include "ctsurg/sim/base/particle_state.h"
 #include "ctsurg/sim/springs/device_simulation.h"
 #include "ctsurg/sim/springs/explicit_spring_model.h"
+#include "ctsurg/sim/springs/instrument_contact.h"
 #include "ctsurg/sim/springs/sphere_tools.h"
 #include "ctsurg/sim/springs/spring_cutting.h"
 #include "ctsurg/sim/springs/spring_engine.h"
@@ -30,6 +32,7 @@ class SpringStepper {
   virtual void apply_grab(const Grab& grab, int handle, const std::array<double, 3>& centre) = 0;
   virtual void release_grab(int handle) = 0;
   virtual int64_t probe(const Sphere& tool) = 0;
+  virtual int64_t push_out(const InstrumentView& instrument) = 0;
   virtual int64_t cut(const Triangle& blade) = 0;
   // Makes the host's state (and the model's spring presence) current / uploads the host's state.
   virtual void to_host() = 0;
@@ -49,6 +52,7 @@ class HostSpringStepper final : public SpringStepper {
   }
   void release_grab(int) override {}
   int64_t probe(const Sphere& tool) override { return probe_sphere(state_, tool, threads_); }
+  int64_t push_out(const InstrumentView& instrument) override { return push_out_of_instrument(state_, instrument, threads_); }
   int64_t cut(const Triangle& blade) override {
     return std::visit([&](auto& m) { return cut_springs_crossing_triangle(m, state_, blade, threads_); }, model_);
   }
@@ -80,6 +84,10 @@ class DeviceSpringStepper final : public SpringStepper {
   void apply_grab(const Grab&, int handle, const std::array<double, 3>& centre) override { gpu_.apply_grab(centre, handle); }
   void release_grab(int handle) override { gpu_.release_grab(handle); }
   int64_t probe(const Sphere& tool) override { return gpu_.probe(tool); }
+  // The scenario refuses instruments on cuda (scenario_engine.cpp) until the device launch exists.
+  int64_t push_out(const InstrumentView&) override {
+    throw InputError("instrument", "backend", "instruments run on the cpu backend only; set backend: cpu");
+  }
   int64_t cut(const Triangle& blade) override { return gpu_.cut_springs_crossing_triangle(blade); }
   void to_host() override {
     gpu_.download_state(state_);

@@ -7,6 +7,7 @@
 #include "ctsurg/sim/fem/fem_forces.h"
 #include "ctsurg/sim/fem/fem_static_solver.h"
 #include "fem_test_models.h"
+#include "instrument_test_shapes.h"
 
 #include <gtest/gtest.h>
 
@@ -151,6 +152,37 @@ TEST(FemExplicitDynamics, SphereProbeKeepsNodesOutside) {
   }
   EXPECT_THROW(d.set_contact_sphere(centre, -1), InputError);
   EXPECT_THROW(d.set_prescribed({0}, {1.0}), InputError);
+}
+
+TEST(FemExplicitDynamics, InstrumentKeepsNodesOutAsTheSphereDoes) {
+  // The sphere probe above as an instrument mesh (an icosphere within 0.01 mm of it, 0.1 mm grid):
+  // no free node is deeper in it than 0.4 grid spacings after the steps, and the beam takes the same
+  // shape as under the sphere to within the mesh's chord and the grid's rounding.
+  const FemModel m = beam();
+  FemDynamicsOptions o;
+  o.mass_damping = 200;
+  FemExplicitDynamics with_mesh(m, o), with_sphere(m, o);
+  with_mesh.set_fixed_nodes(nodes_where(m, 0, 0.0));
+  with_sphere.set_fixed_nodes(nodes_where(m, 0, 0.0));
+  const std::array<double, 3> centre{10, 2, 4 + 1.5 - 0.6};
+  const Instrument ball = make_instrument(test::icosphere(1.5, 4), "ball", 0.1);
+  const InstrumentView v = instrument_view(ball, kIdentityRotation, centre);
+  with_mesh.set_contact_instruments({v});
+  with_sphere.set_contact_sphere(centre, 1.5);
+  with_mesh.step(200);
+  with_sphere.step(200);
+  EXPECT_GT(with_mesh.contacts(), 0);
+  const auto p = with_mesh.positions(), q = with_sphere.positions();
+  double deepest = 0, worst = 0;
+  for (int32_t i = 0; i < m.node_count(); ++i) {
+    deepest = std::max(deepest, -instrument_signed_distance(v, p[3 * i], p[3 * i + 1], p[3 * i + 2]));
+    for (int a = 0; a < 3; ++a) worst = std::max(worst, std::abs(p[3 * i + a] - q[3 * i + a]));
+  }
+  EXPECT_LT(deepest, 0.04);
+  EXPECT_LT(worst, 0.02);
+  with_mesh.set_contact_instruments({});
+  InstrumentView empty;
+  EXPECT_THROW(with_mesh.set_contact_instruments({empty}), InputError);
 }
 
 }  // namespace

@@ -195,6 +195,55 @@ TEST(Scenario, FemKindsAndTheirRules) {
             std::string::npos);
 }
 
+TEST(Scenario, InstrumentsTheirMeshesAndOrientations) {
+  const std::string base =
+      "ctsurg_scenario: 1\nmodel: {kind: spring_grid, grid: g.h5}\nmaterial: {preset: liver}\ntime: {duration_s: 1}\n"
+      "output: {trajectory: o.h5}\n";
+  const auto s = parse_scenario(base + R"(tools:
+  - instrument:
+      mesh: ../instruments/probe_rod.stl
+      grid_spacing_mm: 0.25
+      path:
+        - {t: 0, position_mm: [1, 2, 3], rotation: {axis: [0, 0, 1], angle_deg: 90}}
+        - {t: 0.5, offset_mm: [0, 0, -5]}
+        - {t: 1, offset_mm: [0, 0, -5], quaternion: [1, 0, 0, 0]}
+)",
+                                "f.yaml", "/b/s");
+  ASSERT_EQ(s.tools.size(), 1u);
+  const auto& t = s.tools[0];
+  EXPECT_EQ(t.kind, ctsurg::sim::ToolKind::instrument);
+  EXPECT_EQ(t.instrument_mesh, std::filesystem::path("/b/s/../instruments/probe_rod.stl"));
+  EXPECT_EQ(t.instrument_spacing_mm, 0.25);
+  ASSERT_EQ(t.path.size(), 3u);
+  ASSERT_TRUE(t.path[0].rotation.has_value());
+  EXPECT_NEAR((*t.path[0].rotation)[0], std::sqrt(0.5), 1e-12);
+  EXPECT_NEAR((*t.path[0].rotation)[3], std::sqrt(0.5), 1e-12);
+  EXPECT_FALSE(t.path[1].rotation.has_value());  // holds the previous key's
+  EXPECT_EQ(*t.path[2].rotation, (ctsurg::sim::Quaternion{1, 0, 0, 0}));
+  // The pipeline makes the run depend on the mesh (ctsurg-sim --describe).
+  EXPECT_NE(ctsurg::sim::describe_scenario(s).find("\"instruments\": [\n    \"/b/s/../instruments/probe_rod.stl\""), std::string::npos)
+      << ctsurg::sim::describe_scenario(s);
+
+  const std::string tool = "tools:\n  - instrument:\n      mesh: m.stl\n      path:\n        - {t: 0, position_mm: [0, 0, 0]";
+  EXPECT_NE(parse_error(base + tool + ", quaternion: [2, 0, 0, 0]}\n").find("f.yaml: tools[0].instrument.path[0].quaternion: is not a rotation"),
+            std::string::npos)
+      << parse_error(base + tool + ", quaternion: [2, 0, 0, 0]}\n");
+  EXPECT_NE(parse_error(base + tool + ", quaternion: [1, 0, 0]}\n").find("expected [w, x, y, z]"), std::string::npos);
+  EXPECT_NE(parse_error(base + tool + ", rotation: {axis: [0, 0, 0], angle_deg: 5}}\n").find("rotation.axis: must not be zero"),
+            std::string::npos);
+  EXPECT_NE(parse_error(base + tool + ", rotation: {axis: [0, 0, 1], angle_deg: 5}, quaternion: [1, 0, 0, 0]}\n")
+                .find("give one of quaternion, rotation"),
+            std::string::npos);
+  EXPECT_NE(parse_error(base + "tools:\n  - grab: {radius_mm: 2, path: [{t: 0, position_mm: [0, 0, 0], quaternion: [1, 0, 0, 0]}]}\n")
+                .find("unknown"),
+            std::string::npos);  // orientations are for instruments only
+  EXPECT_NE(parse_error(base + "tools:\n  - instrument: {path: [{t: 0, position_mm: [0, 0, 0]}]}\n").find("tools[0].instrument.mesh"),
+            std::string::npos);
+  const std::string fem = "ctsurg_scenario: 1\nmodel: {kind: fem, tetmesh: t.h5, solver: static}\nmaterial: {preset: kidney}\n"
+                          "time: {duration_s: 1}\noutput: {trajectory: o.h5}\n";
+  EXPECT_NE(parse_error(fem + tool + "}\n").find("instrument needs solver: dynamic"), std::string::npos) << parse_error(fem + tool + "}\n");
+}
+
 TEST(Scenario, SolverSectionAxesAndTheNewFemModels) {
   const std::string base =
       "ctsurg_scenario: 1\nmodel:\n  kind: fem\n  tetmesh: t.h5\n  material_law: corotational\n  solver: implicit\n"

@@ -6,6 +6,8 @@
 // copy of the timeline replays the same sweeps (a restart's checkpoint).
 #include "ctsurg/sim/scenario/tool_timeline.h"
 
+#include "ctsurg/core/error.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -22,7 +24,7 @@ std::vector<double> box_corners() {
   return r;
 }
 
-Keyframe key(double t, PointSpec::Kind kind, const Vec3& v) { return {t, {kind, v}}; }
+Keyframe key(double t, PointSpec::Kind kind, const Vec3& v) { return {t, {kind, v}, std::nullopt}; }
 
 ToolAction tool(ToolKind kind, std::vector<Keyframe> path, double start, double end) {
   ToolAction a;
@@ -121,6 +123,37 @@ TEST(ToolTimeline, BladeSweepsOnStraightStretchesOnceItMovedFarEnough) {
   // A copy (a restart's checkpoint) replays the same sweeps.
   ToolTimeline replay = checkpoint;
   EXPECT_EQ(run(replay), expected);
+}
+
+TEST(ToolTimeline, AnInstrumentTurnsBySlerpAndCarriesItsShape) {
+  // Keys at 0 (no rotation given: the identity), 1 s (90 degrees about z) and 2 s (none: held): the
+  // inputs carry the loaded instrument and the rotation slerped on the same time fraction as the path.
+  ToolAction a = tool(ToolKind::instrument,
+                      {key(0, PointSpec::Kind::position_mm, {0, 0, 0}), key(1, PointSpec::Kind::offset_mm, {10, 0, 0}),
+                       key(2, PointSpec::Kind::offset_mm, {10, 0, 0})},
+                      0, 3);
+  a.path[1].rotation = axis_angle_rotation({0, 0, 1}, 90, "t", "r");
+  a.instrument_mesh = std::filesystem::path(CTSURG_SOURCE_DIR) / "data_samples" / "instruments" / "probe_rod.stl";
+  std::vector<std::string> notes;
+  ToolTimeline t({a}, box_corners(), {0, 0, 0}, [&](const std::string& n) { notes.push_back(n); });
+  ASSERT_TRUE(t.instrument(0));
+  EXPECT_NE(notes.at(0).find("distance grid"), std::string::npos);
+  EXPECT_NEAR(rotation_angle_deg(t.orientation(0, 0.5)), 45, 1e-9);
+  EXPECT_NEAR(rotation_angle_deg(t.orientation(0, 1.5)), 90, 1e-9);
+  std::vector<ToolInput> in;
+  t.inputs(0.2, 0.25, 0.1, in);
+  ASSERT_EQ(in.size(), 1u);
+  EXPECT_EQ(in[0].instrument, t.instrument(0));
+  EXPECT_NEAR(rotation_angle_deg(in[0].orientation), 22.5, 1e-9);
+  expect_near(in[0].centre, {2.5, 0, 0});
+  // A mesh that is not there: the file is named.
+  a.instrument_mesh = "/nonexistent/jaw.ply";
+  try {
+    ToolTimeline bad({a}, box_corners(), {0, 0, 0});
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("/nonexistent/jaw.ply"), std::string::npos) << e.what();
+  }
 }
 
 }  // namespace

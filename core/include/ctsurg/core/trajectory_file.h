@@ -14,6 +14,10 @@
 //   /trajectory/tools/spheres              (F, S, 4)  float64  centre xyz LPS mm, radius mm (0: inactive)
 //                                          attribute kinds: "grab;probe;..." (one per sphere)
 //   /trajectory/tools/blades               (F, B, 7)  float64  edge end a xyz, end b xyz (LPS mm), active 1/0
+//   /trajectory/tools/instruments/<k>/vertices   (V_k, 3) float32 the instrument's mesh, its own frame, mm
+//   /trajectory/tools/instruments/<k>/triangles  (T_k, 3) uint32  (attribute name: the mesh file)
+//   /trajectory/tools/instrument_poses     (F, I, 8)  float64  active 1/0, rotation w x y z (unit), translation
+//                                          LPS mm: a vertex q of instrument k is at R q + t (optional: I = 0)
 //   /trajectory/particles/rest_positions   (P, 3)     float32  optional: the model's nodes at rest
 //   /trajectory/particles/positions        (F, P, 3)  float32  optional: the nodes at each frame
 //
@@ -36,6 +40,13 @@ struct TrajectoryMetric {
   std::vector<double> values;  // one per frame
 };
 
+// A rigid instrument's shape (sim/base/instrument.h), for the renderer to draw at its poses.
+struct TrajectoryInstrument {
+  std::string name;                 // the mesh file the scenario named
+  std::vector<float> vertices;      // V x 3 mm, the instrument's own frame
+  std::vector<uint32_t> triangles;  // T x 3
+};
+
 struct Trajectory {
   std::string scenario;        // the scenario's name
   std::string model;           // the model kind, e.g. "spring_grid"
@@ -52,6 +63,8 @@ struct Trajectory {
   std::vector<std::string> sphere_kinds;           // S: "grab" or "probe"
   std::vector<double> spheres;                     // F x S x 4
   std::vector<double> blades;                      // F x B x 7
+  std::vector<TrajectoryInstrument> instruments;   // I
+  std::vector<double> instrument_poses;            // F x I x 8: active, w x y z, t (LPS mm)
   std::vector<float> rest_particles;               // P x 3 or empty
   std::vector<float> particles;                    // F x P x 3 or empty
 
@@ -67,7 +80,8 @@ struct Trajectory {
   const std::vector<uint32_t>& frame_triangles(int64_t f) const { return topologies[topology_of_frame[f]]; }
 };
 
-// Checks every array's size against F, V, S, B, P and the triangles' vertex ids; InputError(file,
+// Checks every array's size against F, V, S, B, I, P and the triangles' vertex ids (and the poses'
+// rotations: unit quaternions); InputError(file,
 // "/trajectory/...", ...) naming the first inconsistency (file: the name used in messages).
 void validate_trajectory(const Trajectory& trajectory, const std::string& file);
 // Writes `path` and its .xdmf sidecar atomically (validated first).

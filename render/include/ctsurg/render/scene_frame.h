@@ -27,6 +27,8 @@ struct SceneFrame {
   int topology = 0;                               // id of `triangles` (cache key for frames)
   std::vector<ToolSphere> spheres;                // active spheres only
   std::vector<ToolBlade> blades;                  // active blades only
+  std::vector<float> instrument_triangles;        // active instruments at their poses: #T x 3 corners x
+                                                  //   (position LPS mm, unit face normal), flat shaded
   std::vector<float> values;                      // #V heat-map values (mm) or empty
 };
 

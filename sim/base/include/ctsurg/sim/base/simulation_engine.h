@@ -10,7 +10,8 @@
 // keeps what the tool holds. A grab captures what is inside its sphere when it first becomes active
 // and moves it with its centre until it stops being active (then it lets go, for good); a probe pushes
 // the model out of its sphere while active; a force spreads its total force over what is inside its
-// sphere when it starts, until it ends; a blade cuts what its edge crossed along the straight
+// sphere when it starts, until it ends; an instrument (a rigid closed mesh at a position and an
+// orientation) pushes the model out of itself while active; a blade cuts what its edge crossed along the straight
 // segments its centre swept since its last sweep (the caller decides when a blade sweeps:
 // blade_sweep_mm()).
 //
@@ -25,12 +26,15 @@
 // Units: mm, s, g (base/particle_state.h): forces uN, energies nJ.
 #pragma once
 
+#include "ctsurg/sim/base/instrument.h"
 #include "ctsurg/sim/base/real.h"
+#include "ctsurg/sim/base/rigid_pose.h"
 #include "ctsurg/sim/base/stability_report.h"
 
 #include <array>
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <string>
 #include <utility>
 #include <vector>
@@ -39,7 +43,7 @@ namespace ctsurg::sim {
 
 using Vec3 = std::array<double, 3>;
 
-enum class ToolKind { grab, probe, cut, force };
+enum class ToolKind { grab, probe, cut, force, instrument };
 const char* to_string(ToolKind kind);
 
 // One tool at the end of a step (or at a quasi-static frame's time).
@@ -55,6 +59,8 @@ struct ToolInput {
   Vec3 start_centre{0, 0, 0};          //   quasi-static engine captures there
   std::vector<std::array<Vec3, 2>> sweeps;  // cut: straight segments (from, to) its centre swept
                                             //   since its last sweep, in order; empty: no cut now
+  std::shared_ptr<const Instrument> instrument;  // instrument: its shape (base/instrument.h)
+  Quaternion orientation = kIdentityRotation;    // instrument: its rotation now (its frame -> the run's)
 };
 
 // What every engine is built with (an engine adds its own: fem_engine.h's solver).

@@ -138,6 +138,7 @@ class FemEngine final : public SimulationEngine {
   int64_t steps_ = 0;
   std::vector<int32_t> grab_nodes_;  // scratch
   std::vector<double> grab_displacements_;
+  std::vector<InstrumentView> instrument_views_;  // the active instruments at the last step
 };
 
 }  // namespace ctsurg::sim

@@ -33,6 +33,7 @@
 #pragma once
 
 #include "ctsurg/sim/base/backend.h"
+#include "ctsurg/sim/base/instrument.h"
 #include "ctsurg/sim/base/real.h"
 #include "ctsurg/sim/fem/fem_model.h"
 
@@ -89,6 +90,10 @@ class FemExplicitDynamics {
   void set_external_forces(const std::vector<double>& forces);
   // A rigid sphere (centre LPS mm, radius mm) that free nodes may not enter; radius 0 = none.
   void set_contact_sphere(const std::array<double, 3>& centre, double radius);
+  // Rigid instruments at their poses (base/instrument.h): free nodes inside one are projected out of
+  // it after each step, as the sphere's; empty = none. The views' grids must outlive the steps. cpu
+  // only (InputError on cuda).
+  void set_contact_instruments(const std::vector<InstrumentView>& instruments);
 
   // Advances `steps` steps of dt. Throws RuntimeError (the stability guard above).
   void step(int steps = 1);
@@ -96,7 +101,7 @@ class FemExplicitDynamics {
   double time() const { return time_; }            // s
   double dt() const { return dt_; }                // s
   int64_t steps_taken() const { return steps_; }
-  int64_t contacts() const { return contacts_; }   // nodes moved by the sphere in the last step
+  int64_t contacts() const { return contacts_; }   // nodes moved by the sphere and instruments in the last step
   std::vector<double> displacements() const;       // #N x 3 mm
   std::vector<double> positions() const;           // #N x 3 LPS mm, rest + u
   std::vector<Real> raw_displacements() const;     // #N x 3 mm, Real (the step's own values)
@@ -122,6 +127,7 @@ class FemExplicitDynamics {
   std::vector<int32_t> prescribed_nodes_;
   std::vector<Real> prescribed_;
   std::array<double, 4> sphere_{0, 0, 0, 0};
+  std::vector<InstrumentView> instruments_;
   std::unique_ptr<FemDeviceDynamics> device_;  // cuda: the state on the device; null for cpu
 };
 

@@ -9,6 +9,7 @@
 
 #include "ctsurg/sim/base/fixed_regions.h"
 #include "ctsurg/sim/base/material_presets.h"
+#include "ctsurg/sim/base/rigid_pose.h"
 #include "ctsurg/sim/base/simulation_engine.h"
 #include "ctsurg/sim/fem/fem_engine.h"
 #include "ctsurg/sim/fem/fem_material.h"
@@ -18,6 +19,7 @@
 #include <array>
 #include <cstdint>
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -40,6 +42,9 @@ struct PointSpec {
 struct Keyframe {
   double t = 0;  // s
   PointSpec point;
+  // instrument: its orientation at t (the instrument's frame -> LPS, a unit quaternion {w, x, y, z});
+  // absent: the previous keyframe's (the first: the identity). Slerp between keyframes.
+  std::optional<Quaternion> rotation;
 };
 
 struct ToolAction {
@@ -54,6 +59,10 @@ struct ToolAction {
   // force: a total force (N, LPS) shared equally by the particles or nodes inside the sphere at
   // start_s (a point load: the FEM paper's experiment), applied until end_s.
   std::array<double, 3> force_n{0, 0, 0};
+  // instrument: a closed triangle mesh (.stl, .obj, .ply; mm, its own frame: the path moves its origin)
+  // that pushes the tissue out of itself (base/instrument.h), and its distance grid's spacing (0: auto).
+  std::filesystem::path instrument_mesh;
+  double instrument_spacing_mm = 0;
 };
 
 // A picture the pipeline makes from the trajectory with ctsurg-render (scripts/Makefile); ctsurg-sim

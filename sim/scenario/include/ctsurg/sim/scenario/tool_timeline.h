@@ -7,6 +7,11 @@
 // after it. snap_to_tissue shifts the whole path so that its first point is on the nearest rest
 // particle (lowest id on ties).
 //
+// Orientations. An instrument's keyframes may give its rotation (scenario.h); a key without one keeps
+// the previous key's (the first: the identity); between keys the rotation is slerped (base/rigid_pose.h)
+// on the same time fraction as the position. The instrument's mesh is read and its distance grid baked
+// when the timeline is made (InputError naming the mesh file when it is not a closed mesh).
+//
 // Windows. A tool is active from start_s to end_s: start_s - 1e-12 <= t < end_s (the tolerance keeps a
 // step that lands on start_s in floating point from missing it).
 //
@@ -23,6 +28,7 @@
 #include "ctsurg/sim/scenario/scenario.h"
 
 #include <functional>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -39,6 +45,9 @@ class ToolTimeline {
   size_t size() const { return tools_.size(); }
   const ToolAction& tool(size_t i) const { return tools_[i].spec; }
   Vec3 position(size_t i, double t) const;   // mm, local frame
+  Quaternion orientation(size_t i, double t) const;  // an instrument's rotation (others: the identity)
+  // An instrument's shape (null for the other tools).
+  const std::shared_ptr<const Instrument>& instrument(size_t i) const { return tools_[i].instrument; }
   bool active(size_t i, double t) const;
   // Whether no tool acts (starts, moves or holds) in (t0, t1].
   bool idle(double t0, double t1) const;
@@ -52,12 +61,15 @@ class ToolTimeline {
   struct Path {
     std::vector<double> t;  // s, increasing
     std::vector<Vec3> p;    // mm
+    std::vector<Quaternion> r;  // unit, one per key
     Vec3 at(double time) const;
+    Quaternion rotation_at(double time) const;
   };
   struct Tool {
     ToolAction spec;  // a copy: the timeline does not depend on the scenario living on
     Path path;
     std::optional<double> cut_from;  // a blade: the time its current sweep started
+    std::shared_ptr<const Instrument> instrument;
   };
   void sweeps(Tool& tool, double t0, double t1, double min_sweep_mm, std::vector<std::array<Vec3, 2>>& out) const;
 

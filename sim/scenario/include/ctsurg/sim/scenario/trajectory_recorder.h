@@ -1,7 +1,8 @@
 // Collects a run's output frames into a Trajectory (core/trajectory_file.h): per frame the time, the
 // surface's vertices (or the nodes' when the scenario has no surface) and its topology when a cut
 // changed it, optionally every node's position, the tools (spheres: centre and radius, 0 when not
-// acting; blades: the edge's ends and whether it is active), and the metrics:
+// acting; blades: the edge's ends and whether it is active; instruments: their meshes once and their
+// poses per frame), and the metrics:
 //
 //   kinetic_energy (nJ), elastic_energy (nJ), max_displacement (mm, over the nodes),
 //   surface_max_displacement (mm, over the surface's vertices; the nodes' when there is none),
