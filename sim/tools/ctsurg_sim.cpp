@@ -102,7 +102,8 @@ int main(int argc, char** argv) {
                        report.particles, report.fixed, report.elements, report.steps, report.wall_s);
         }
         if (report.springs_cut > 0) {
-          spdlog::info("sim: {} springs cut, {} surface triangles removed", report.springs_cut, report.surface_triangles_removed);
+          spdlog::info("sim: {} {} cut, {} surface triangles removed", report.springs_cut,
+                       s.model == ctsurg::sim::ModelKind::fem ? "element faces" : "springs", report.surface_triangles_removed);
         }
         ctsurg::Provenance provenance{ctx.name, ctsurg::kVersion, ctx.command_line, {}, nlohmann::json::array()};
         provenance.add_input(scenario_path);

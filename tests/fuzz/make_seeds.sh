@@ -9,12 +9,16 @@ root=$(cd "$(dirname "$0")/../.." && pwd)
 rm -rf "$out"
 mkdir -p "$out"/{fuzz_nifti,fuzz_nrrd,fuzz_metaimage,fuzz_dicom_folder,fuzz_scenario}
 mkdir -p "$out"/{fuzz_hu_volume_file,fuzz_occupancy_grid_file,fuzz_surface_mesh_file,fuzz_tet_mesh_file,fuzz_trajectory_file}
+mkdir -p "$out"/{fuzz_stl,fuzz_obj,fuzz_ply}
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 q="-q"
 
 cp "$root/data_samples/heart/heart_mask.nii.gz" "$out/fuzz_nifti/heart_mask.nii.gz"
 cp "$root/data_samples/scenarios/"*.yaml "$out/fuzz_scenario/"
+cp "$root/data_samples/instruments/"*.stl "$out/fuzz_stl/"   # binary and ASCII STL
+cp "$root/data_samples/instruments/"*.obj "$out/fuzz_obj/"
+cp "$root/data_samples/instruments/"*.ply "$out/fuzz_ply/"
 for suffix in nii nii.gz nrrd mha; do
   "$bin/ctsurg-phantom" $q sphere "$work/sphere.$suffix" --radius-mm 5 --spacing-mm 2 --margin-mm 2 --supersample 1
 done

@@ -2,6 +2,7 @@
 
 #include "ctsurg/core/error.h"
 #include "ctsurg/sim/base/parallel.h"
+#include "ctsurg/sim/fem/fem_cutting.h"
 #include "ctsurg/sim/fem/fem_forces.h"
 #include "ctsurg/sim/fem/kernels/fem_quadratic_element_impl.h"
 #include "fem_rigid_modes.h"
@@ -84,6 +85,15 @@ FemEngine::FemEngine(FemModel model, FemBoundaryConditions supports, EmbeddedSur
   supports_.prescribed_nodes.clear();
   supports_.prescribed_displacements.clear();
   if (model_.order == 2 && !surface_.empty()) quadratic_surface(model_, surface_.coupling(), quadratic_nodes_, quadratic_weights_);
+  if (options_.solver == FemSolver::dynamic && !supports_.fixed_components.empty()) {
+    throw InputError(options_.where, "fixed", "the explicit dynamics fixes whole nodes; fixing some axes needs the static or implicit solver");
+  }
+  if (options_.solver == FemSolver::dynamic) counts_.critical_dt_s = fem_critical_time_step(model_, options_.safety_factor).critical;
+  make_solvers();
+}
+
+// The solver for options_.solver on model_ and supports_ (at the start, and again after a cut split nodes).
+void FemEngine::make_solvers() {
   if (options_.solver == FemSolver::dynamic) {
     FemDynamicsOptions o;  // the explicit dynamics' own options struct: every field it needs, from ours
     o.dt = options_.dt;
@@ -91,10 +101,7 @@ FemEngine::FemEngine(FemModel model, FemBoundaryConditions supports, EmbeddedSur
     o.mass_damping = options_.mass_damping;
     o.gravity = options_.gravity;
     o.threads = options_.threads;
-    counts_.critical_dt_s = fem_critical_time_step(model_, options_.safety_factor).critical;
-    if (!supports_.fixed_components.empty()) {
-      throw InputError(options_.where, "fixed", "the explicit dynamics fixes whole nodes; fixing some axes needs the static or implicit solver");
-    }
+    dynamics_.reset();
     dynamics_.emplace(model_, o, backend_);
     dynamics_->set_fixed_nodes(supports_.fixed_nodes);
     return;
@@ -113,6 +120,8 @@ FemEngine::FemEngine(FemModel model, FemBoundaryConditions supports, EmbeddedSur
   }
   // Quasi-static. The linear material factorises its constant stiffness once; the nonlinear laws run
   // Newton with conjugate gradients per frame.
+  linear_.reset();
+  static_solver_.reset();
   if (supports_.fixed_nodes.empty() && supports_.fixed_components.empty()) {
     throw InputError(options_.where, "fixed", "a static FEM problem needs fixed nodes (the system is singular otherwise)");
   }
@@ -143,8 +152,175 @@ FemEngine::FemEngine(FemModel model, FemBoundaryConditions supports, EmbeddedSur
 
 FemEngine::~FemEngine() = default;
 
+double FemEngine::blade_sweep_mm() const {
+  // A quarter of the mean edge: a sweep shorter than that tests every face for little.
+  if (model_.order != 1 || model_.tets.empty()) return 0;
+  double total = 0;
+  int64_t edges = 0;
+  for (size_t e = 0; e < model_.tets.size(); e += 4)
+    for (int a = 0; a < 4; ++a)
+      for (int b = a + 1; b < 4; ++b) {
+        const double* p = &model_.nodes[3 * static_cast<size_t>(model_.tets[e + static_cast<size_t>(a)])];
+        const double* q = &model_.nodes[3 * static_cast<size_t>(model_.tets[e + static_cast<size_t>(b)])];
+        total += std::sqrt((p[0] - q[0]) * (p[0] - q[0]) + (p[1] - q[1]) * (p[1] - q[1]) + (p[2] - q[2]) * (p[2] - q[2]));
+        ++edges;
+      }
+  return 0.25 * total / static_cast<double>(edges);
+}
+
+void FemEngine::apply_cuts(const std::vector<ToolInput>& tools) {
+  bool any = false;
+  for (const ToolInput& tool : tools) any = any || (tool.kind == ToolKind::cut && !tool.sweeps.empty());
+  if (!any) return;
+  if (!separation_) {
+    separation_ = std::make_unique<FemTetSeparation>(model_);
+    if (!surface_.empty()) {
+      // Each surface vertex's tet and which of its corners each tie is: after a split, the vertex
+      // follows the copies its own tet uses.
+      std::map<std::array<int32_t, 4>, int32_t> element_of;
+      for (int32_t e = 0; e < model_.tet_count(); ++e) {
+        std::array<int32_t, 4> key;
+        for (int a = 0; a < 4; ++a) key[static_cast<size_t>(a)] = model_.tets[4 * static_cast<size_t>(e) + static_cast<size_t>(a)];
+        std::sort(key.begin(), key.end());
+        element_of.emplace(key, e);
+      }
+      const SurfaceCoupling& c = surface_.coupling();
+      const int64_t nv = c.vertex_count();
+      surface_element_.assign(static_cast<size_t>(nv), -1);
+      surface_corner_.assign(8 * static_cast<size_t>(nv), -1);
+      for (int64_t v = 0; v < nv; ++v) {
+        std::array<int32_t, 4> key;
+        for (int k = 0; k < 4; ++k) key[static_cast<size_t>(k)] = c.particles[8 * static_cast<size_t>(v) + static_cast<size_t>(k)];
+        std::sort(key.begin(), key.end());
+        const auto it = element_of.find(key);
+        if (it == element_of.end()) throw InputError(options_.where, "surface", "vertex " + std::to_string(v) + " is not tied to a tet");
+        surface_element_[static_cast<size_t>(v)] = it->second;
+        for (int k = 0; k < 4; ++k)
+          for (int a = 0; a < 4; ++a)
+            if (model_.tets[4 * static_cast<size_t>(it->second) + static_cast<size_t>(a)] == c.particles[8 * static_cast<size_t>(v) + static_cast<size_t>(k)])
+              surface_corner_[8 * static_cast<size_t>(v) + static_cast<size_t>(k)] = a;
+      }
+    }
+  }
+  sync();
+  std::vector<double> positions(u_.size());
+  for (size_t i = 0; i < u_.size(); ++i) positions[i] = model_.nodes[i] + u_[i];
+  std::vector<float> vertices;
+  if (!surface_.empty()) surface_vertices(vertices);
+  std::vector<int32_t> tets = model_.tets, parents;
+  const int32_t n0 = model_.node_count();
+  for (const ToolInput& tool : tools) {
+    if (tool.kind != ToolKind::cut) continue;
+    for (const auto& [from, to] : tool.sweeps) {
+      for (const Triangle& tri : swept_blade(from, to, tool.blade_edge_mm)) {
+        const FemCutResult r = separation_->cut(tets, n0 + static_cast<int32_t>(parents.size()), positions, tri);
+        faces_cut_ += r.faces_separated;
+        for (const int32_t p : r.new_node_parent) {
+          parents.push_back(p);
+          for (int c = 0; c < 3; ++c) positions.push_back(positions[3 * static_cast<size_t>(p) + static_cast<size_t>(c)]);
+        }
+        if (!surface_.empty()) triangles_removed_ += surface_.cut_triangles(tri, vertices);
+      }
+    }
+  }
+  if (!parents.empty()) split_nodes(tets, parents, tools);
+}
+
+// After a cut: the model with the new nodes (each a copy of its parent: rest position, displacement,
+// velocity, support), and every solver rebuilt on it with the state carried over.
+void FemEngine::split_nodes(const std::vector<int32_t>& tets, const std::vector<int32_t>& parents, const std::vector<ToolInput>& tools) {
+  const int32_t n0 = model_.node_count();
+  const auto extend = [&](auto& values) {  // #N x 3 -> (#N + new) x 3, copies of the parents' rows
+    for (const int32_t p : parents)
+      for (int c = 0; c < 3; ++c) values.push_back(values[3 * static_cast<size_t>(p) + static_cast<size_t>(c)]);
+  };
+  std::vector<double> nodes = model_.nodes;
+  extend(nodes);
+  FemModel m = build_fem_model(nodes, tets, model_.material);
+  m.frame_origin = model_.frame_origin;
+  std::vector<uint8_t> fixed = fixed_flags(n0, supports_);
+  for (size_t k = 0; k < parents.size(); ++k) {
+    const int32_t id = n0 + static_cast<int32_t>(k), p = parents[k];
+    fixed.push_back(fixed[static_cast<size_t>(p)]);
+    if (std::binary_search(supports_.fixed_nodes.begin(), supports_.fixed_nodes.end(), p) ||
+        std::find(supports_.fixed_nodes.begin(), supports_.fixed_nodes.end(), p) != supports_.fixed_nodes.end()) {
+      supports_.fixed_nodes.push_back(id);
+    }
+    for (int a = 0; a < 3; ++a) {
+      if (std::find(supports_.fixed_components.begin(), supports_.fixed_components.end(), 3 * p + a) != supports_.fixed_components.end())
+        supports_.fixed_components.push_back(3 * id + a);
+    }
+  }
+  if (options_.solver == FemSolver::static_equilibrium) {
+    // A piece the cut freed with no support would make the static problem singular: say so, with the
+    // tool and what to use instead.
+    std::vector<int32_t> piece;
+    const int32_t pieces = fem_mesh_pieces(tets, m.node_count(), piece);
+    std::vector<uint8_t> held(static_cast<size_t>(pieces), 0);
+    for (int32_t n = 0; n < m.node_count(); ++n)
+      if (fixed[static_cast<size_t>(n)] && piece[static_cast<size_t>(n)] >= 0) held[static_cast<size_t>(piece[static_cast<size_t>(n)])] = 1;
+    for (int32_t k = 0; k < pieces; ++k) {
+      if (held[static_cast<size_t>(k)]) continue;
+      std::string label = "tools";
+      for (const ToolInput& tool : tools)
+        if (tool.kind == ToolKind::cut && !tool.sweeps.empty()) label = tool.label;
+      throw InputError(options_.where, label, "the cut frees a piece of the mesh that no support holds; a static solve cannot place it: "
+                                              "use solver: dynamic or implicit, or fix a region of that piece");
+    }
+  }
+  // The dynamics' state, carried over.
+  std::vector<Real> ru, rprev;
+  std::vector<double> v;
+  double t = 0;
+  int64_t steps_taken = 0;
+  if (dynamics_) {
+    ru = dynamics_->raw_displacements();
+    rprev = dynamics_->raw_previous_displacements();
+    extend(ru);
+    extend(rprev);
+    t = dynamics_->time();
+    steps_taken = dynamics_->steps_taken();
+  } else if (implicit_) {
+    v = implicit_->velocities();
+    extend(v);
+    t = implicit_->time();
+    steps_taken = implicit_->steps_taken();
+  }
+  extend(u_);
+  model_ = std::move(m);  // the same object: holds_ and the solvers' references stay valid until rebuilt
+  holds_.nodes_added(parents);
+  rest_real_.assign(model_.nodes.begin(), model_.nodes.end());
+  positions_ = ParticleState(rest_real_, std::vector<Real>(static_cast<size_t>(model_.node_count()), Real(1)));
+  counts_.nodes = model_.node_count();
+  counts_.fixed = std::count(fixed.begin(), fixed.end(), uint8_t{1});
+  make_solvers();
+  if (dynamics_) {
+    dynamics_->restore_state(ru, rprev, t, steps_taken);
+    if (!holds_.nodal_forces().empty()) dynamics_->set_external_forces(holds_.nodal_forces());
+    had_grab_ = false;
+  } else if (implicit_) {
+    implicit_->restore_state(u_, v, t, steps_taken);
+    if (!holds_.nodal_forces().empty()) implicit_->set_external_forces(holds_.nodal_forces());
+  }
+  if (!surface_.empty()) {
+    std::vector<int32_t> ties = surface_.coupling().particles;
+    for (size_t v2 = 0; v2 < surface_element_.size(); ++v2) {
+      for (size_t k = 0; k < 8; ++k) {
+        const int32_t a = surface_corner_[8 * v2 + k];
+        if (a >= 0) ties[8 * v2 + k] = model_.tets[4 * static_cast<size_t>(surface_element_[v2]) + static_cast<size_t>(a)];
+      }
+    }
+    surface_.retie(std::move(ties));
+  }
+  nodes_split_ += static_cast<int64_t>(parents.size());
+  if (options_.note) {
+    options_.note("FEM cut: " + std::to_string(parents.size()) + " nodes split (" + std::to_string(model_.node_count()) + " nodes, " +
+                  std::to_string(separation_->faces_separated()) + " faces separated so far)");
+  }
+}
+
 std::vector<std::pair<std::string, std::string>> FemEngine::extra_metrics() const {
-  return {{"newton_iterations", "1"}, {"cg_iterations", "1"}};
+  return {{"newton_iterations", "1"}, {"cg_iterations", "1"}, {"element_volume", "mm^3"}, {"nodes", "1"}};
 }
 
 double FemEngine::dt() const { return dynamics_ ? dynamics_->dt() : implicit_ ? implicit_->dt() : 0.0; }
@@ -152,7 +328,12 @@ double FemEngine::time() const { return dynamics_ ? dynamics_->time() : implicit
 
 void FemEngine::check_tools(const std::vector<ToolInput>& tools) const {
   for (const ToolInput& tool : tools) {
-    if (tool.kind == ToolKind::cut) throw InputError(options_.where, tool.label, "the FEM models do not cut; use a spring model");
+    if (tool.kind == ToolKind::cut && model_.order != 1) {
+      throw InputError(options_.where, tool.label, "cutting needs linear (4-node) tets; quadratic elements are not cut");
+    }
+    if (tool.kind == ToolKind::cut && backend_ != Backend::cpu) {
+      throw InputError(options_.where, tool.label, "cutting an FEM model runs on the cpu backend only; set backend: cpu");
+    }
     if ((tool.kind == ToolKind::probe || tool.kind == ToolKind::instrument) && !dynamics_) {
       throw InputError(options_.where, tool.label,
                        std::string(to_string(tool.kind)) +
@@ -164,6 +345,7 @@ void FemEngine::check_tools(const std::vector<ToolInput>& tools) const {
 StabilityReport FemEngine::step(const std::vector<ToolInput>& tools, int steps) {
   if (!dynamics_ && !implicit_) throw RuntimeError(options_.where + ": the static FEM solver has no time steps (it solves each frame)");
   check_tools(tools);
+  apply_cuts(tools);
   if (implicit_) return step_implicit(tools, steps);
   const double t_next = dynamics_->time() + dynamics_->dt();
   if (holds_.captures(tools)) sync();  // a tool captures the nodes where they are now
@@ -210,6 +392,7 @@ StabilityReport FemEngine::step(const std::vector<ToolInput>& tools, int steps) 
 void FemEngine::equilibrium(const std::vector<ToolInput>& tools, double time) {
   if (dynamics_ || implicit_) throw RuntimeError(options_.where + ": the dynamic FEM solver steps in time (it has no equilibrium solve)");
   check_tools(tools);
+  apply_cuts(tools);
   holds_.update_grabs(tools, time, u_, true, grab_nodes_, grab_displacements_);
   holds_.update_forces(tools, u_, true);
   FemLoads loads;
@@ -315,7 +498,26 @@ EngineMetrics FemEngine::metrics() const {
   double max_u = 0;
   for (size_t i = 0; i < u_.size(); i += 3) max_u = std::max(max_u, u_[i] * u_[i] + u_[i + 1] * u_[i + 1] + u_[i + 2] * u_[i + 2]);
   m.max_displacement = std::sqrt(max_u);
-  m.extra = {static_cast<double>(newton_), static_cast<double>(cg_)};
+  // The elements' deformed volume (of their corner tets: exact for linear tets; the tissue's volume
+  // whatever a cut did to the surface) and the node count (a cut adds nodes).
+  double volume = 0;
+  {
+    const size_t npe = static_cast<size_t>(model_.nodes_per_element());
+    for (size_t e = 0; e < model_.tets.size(); e += npe) {
+      double d[3][3];
+      const double* p0 = &model_.nodes[3 * static_cast<size_t>(model_.tets[e])];
+      const double* u0 = &u_[3 * static_cast<size_t>(model_.tets[e])];
+      for (int a = 1; a < 4; ++a) {
+        const size_t n = 3 * static_cast<size_t>(model_.tets[e + static_cast<size_t>(a)]);
+        for (int c = 0; c < 3; ++c) d[a - 1][c] = model_.nodes[n + static_cast<size_t>(c)] + u_[n + static_cast<size_t>(c)] - p0[c] - u0[c];
+      }
+      volume += (d[0][0] * (d[1][1] * d[2][2] - d[1][2] * d[2][1]) - d[0][1] * (d[1][0] * d[2][2] - d[1][2] * d[2][0]) +
+                 d[0][2] * (d[1][0] * d[2][1] - d[1][1] * d[2][0])) / 6;
+    }
+  }
+  m.extra = {static_cast<double>(newton_), static_cast<double>(cg_), volume, static_cast<double>(model_.node_count())};
+  m.springs_cut = faces_cut_;  // the FEM's cuts: faces separated
+  m.triangles_removed = triangles_removed_;
   return m;
 }
 

@@ -269,6 +269,23 @@ void FemExplicitDynamics::step_on_device(int steps) {
 
 std::vector<Real> FemExplicitDynamics::raw_displacements() const { return device_ ? device_->displacements() : u_; }
 
+std::vector<Real> FemExplicitDynamics::raw_previous_displacements() const {
+  if (device_) throw InputError(kWhere, "backend", "the previous displacements are kept on the device");
+  return u_prev_;
+}
+
+void FemExplicitDynamics::restore_state(const std::vector<Real>& u, const std::vector<Real>& u_prev, double time, int64_t steps) {
+  if (device_) throw InputError(kWhere, "backend", "restoring a state runs on the cpu backend only");
+  if (u.size() != u_.size() || u_prev.size() != u_.size()) throw InputError(kWhere, "state", "expected #N x 3 displacements, twice");
+  for (size_t i = 0; i < u.size(); ++i)
+    if (!std::isfinite(u[i]) || !std::isfinite(u_prev[i])) throw InputError(kWhere, "state", "a displacement is not finite");
+  u_ = u;
+  u_prev_ = u_prev;
+  time_ = time;
+  steps_ = steps;
+  last_energy_ = kinetic_energy();
+}
+
 std::vector<double> FemExplicitDynamics::displacements() const {
   if (device_) {
     const std::vector<Real> u = device_->displacements();

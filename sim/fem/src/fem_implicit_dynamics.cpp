@@ -162,4 +162,14 @@ double FemImplicitDynamics::kinetic_energy() const {
 
 double FemImplicitDynamics::strain_energy() const { return fem_strain_energy(model_, u_); }
 
+void FemImplicitDynamics::restore_state(const std::vector<double>& u, const std::vector<double>& v, double time, int64_t steps) {
+  if (u.size() != u_.size() || v.size() != u_.size()) throw InputError("fem implicit", "state", "expected #N x 3 displacements and velocities");
+  for (size_t i = 0; i < u.size(); ++i)
+    if (!std::isfinite(u[i]) || !std::isfinite(v[i])) throw InputError("fem implicit", "state", "a value is not finite");
+  u_ = u;
+  v_ = v;
+  time_ = time;
+  steps_ = steps;
+}
+
 }  // namespace ctsurg::sim

@@ -33,6 +33,15 @@ FemToolHolds::Hold& FemToolHolds::hold(size_t tool) {
   return holds_[tool];
 }
 
+void FemToolHolds::nodes_added(const std::vector<int32_t>& parents) {
+  for (const int32_t p : parents) fixed_.push_back(fixed_.at(static_cast<size_t>(p)));
+  if (!nodal_forces_.empty()) nodal_forces_.resize(3 * fixed_.size(), 0.0);
+  if (fixed_.size() != static_cast<size_t>(model_.node_count())) {
+    throw RuntimeError("fem tools: the model has " + std::to_string(model_.node_count()) + " nodes after a cut, the tools know " +
+                       std::to_string(fixed_.size()));
+  }
+}
+
 bool FemToolHolds::engaged(size_t tool) const { return tool < holds_.size() && !holds_[tool].nodes.empty(); }
 
 bool FemToolHolds::captures(const std::vector<ToolInput>& tools) const {

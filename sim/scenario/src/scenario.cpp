@@ -318,10 +318,10 @@ static Scenario parse_fields(const std::string& text, const fs::path& file, cons
   if (top.has("tools")) {
     for (const auto& item : top.child("tools").items()) {
       s.tools.push_back(tool_of(item, base_dir));
-      // FEM tools: grab (prescribed displacements) and probe (sphere contact, dynamic only); cutting
-      // a tet mesh is not implemented (the spring models cut).
-      if (s.model == ModelKind::fem && s.tools.back().kind == ToolKind::cut) {
-        item.fail("cut needs a spring model (kind: spring_grid or explicit_springs); the FEM models do not cut");
+      // FEM tools: grab (prescribed displacements), probe and instrument (contact, dynamic only), cut
+      // (elements separated, nodes split: linear tets only, fem/fem_cutting.h).
+      if (s.model == ModelKind::fem && s.fem_order != 1 && s.tools.back().kind == ToolKind::cut) {
+        item.fail("cut needs linear (4-node) tets; quadratic elements are not cut (elements: linear)");
       }
       if (s.model == ModelKind::fem && s.fem_solver != FemSolver::dynamic &&
           (s.tools.back().kind == ToolKind::probe || s.tools.back().kind == ToolKind::instrument)) {

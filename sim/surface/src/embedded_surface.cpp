@@ -26,4 +26,13 @@ int64_t EmbeddedSurface::cut(const Triangle& blade, const std::vector<float>& ve
   return cut_surface(triangles_, coupling_, vertices, positions, blade).triangles_removed;
 }
 
+int64_t EmbeddedSurface::cut_triangles(const Triangle& blade, const std::vector<float>& vertices) {
+  return remove_crossed_triangles(triangles_, vertices, blade);
+}
+
+void EmbeddedSurface::retie(std::vector<int32_t> particles) {
+  if (particles.size() != coupling_.particles.size()) throw InputError("surface", "particles", "expected #V x 8 ties");
+  coupling_.particles = std::move(particles);
+}
+
 }  // namespace ctsurg::sim

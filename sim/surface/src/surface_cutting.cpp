@@ -7,25 +7,33 @@
 
 namespace ctsurg::sim {
 
-SurfaceCutResult cut_surface(std::vector<uint32_t>& triangles, SurfaceCoupling& coupling, const std::vector<float>& vertices,
-                             const ParticleState& state, const Triangle& blade) {
-  const int64_t nv = coupling.vertex_count();
-  if (static_cast<int64_t>(vertices.size()) != 3 * nv) throw InputError("surface cut", "vertices", "expected #V x 3");
-  if (triangles.size() % 3 != 0) throw InputError("surface cut", "triangles", "expected #F x 3");
+namespace {
+
+TriangleView view_of(const Triangle& blade) {
   TriangleView t{};
   for (int c = 0; c < 3; ++c) {
     t.a[c] = blade.a[static_cast<size_t>(c)];
     t.b[c] = blade.b[static_cast<size_t>(c)];
     t.c[c] = blade.c[static_cast<size_t>(c)];
   }
-  // Only vertices and triangles near the blade can be crossed: a box test first keeps a cut step
-  // proportional to the blade's size, not the surface's.
+  return t;
+}
+
+}  // namespace
+
+int64_t remove_crossed_triangles(std::vector<uint32_t>& triangles, const std::vector<float>& vertices, const Triangle& blade) {
+  if (triangles.size() % 3 != 0) throw InputError("surface cut", "triangles", "expected #F x 3");
+  for (const uint32_t v : triangles)
+    if (3 * static_cast<size_t>(v) + 2 >= vertices.size()) throw InputError("surface cut", "triangles", "vertex id out of range");
+  const TriangleView t = view_of(blade);
+  // Only triangles near the blade can be crossed: a box test first keeps a cut step proportional to
+  // the blade's size, not the surface's.
   double lo[3], hi[3];
   for (int c = 0; c < 3; ++c) {
     lo[c] = std::min({t.a[c], t.b[c], t.c[c]});
     hi[c] = std::max({t.a[c], t.b[c], t.c[c]});
   }
-  SurfaceCutResult r;
+  int64_t removed = 0;
   const int64_t nf = static_cast<int64_t>(triangles.size() / 3);
   std::vector<uint32_t> kept;
   kept.reserve(triangles.size());
@@ -41,12 +49,27 @@ SurfaceCutResult cut_surface(std::vector<uint32_t>& triangles, SurfaceCoupling& 
       near = b >= lo[c] && a <= hi[c];
     }
     if (near && triangle_crosses_blade(triangles.data(), vertices.data(), t, f)) {
-      ++r.triangles_removed;
+      ++removed;
       continue;
     }
     kept.insert(kept.end(), triangles.begin() + 3 * f, triangles.begin() + 3 * f + 3);
   }
   triangles.swap(kept);
+  return removed;
+}
+
+SurfaceCutResult cut_surface(std::vector<uint32_t>& triangles, SurfaceCoupling& coupling, const std::vector<float>& vertices,
+                             const ParticleState& state, const Triangle& blade) {
+  const int64_t nv = coupling.vertex_count();
+  if (static_cast<int64_t>(vertices.size()) != 3 * nv) throw InputError("surface cut", "vertices", "expected #V x 3");
+  SurfaceCutResult r;
+  r.triangles_removed = remove_crossed_triangles(triangles, vertices, blade);
+  const TriangleView t = view_of(blade);
+  double lo[3], hi[3];
+  for (int c = 0; c < 3; ++c) {
+    lo[c] = std::min({t.a[c], t.b[c], t.c[c]});
+    hi[c] = std::max({t.a[c], t.b[c], t.c[c]});
+  }
   // A vertex's slots reach at most one cell diagonal away; the box test on the vertex uses the blade
   // box grown by the longest vertex-particle distance, computed on the fly (cheap: one pass).
   for (int64_t i = 0; i < nv; ++i) {

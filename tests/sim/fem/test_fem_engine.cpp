@@ -166,11 +166,22 @@ TEST(FemEngine, WhatTheFemDoesNotTakeIsRefusedWithTheField) {
   ToolInput blade;
   blade.kind = ToolKind::cut;
   blade.label = "tools[1] (cut)";
-  try {
-    e.equilibrium({grab_end({8, 1, 1}), blade}, 0.1);
-    ADD_FAILURE() << "a blade was accepted";
-  } catch (const InputError& err) {
-    EXPECT_EQ(err.field(), "tools[1] (cut)");
+  {
+    // Quadratic tets are not cut.
+    const FemBoxMesh box = fem_box_mesh(kCells, kSize);
+    FemEngineOptions o;
+    o.solver = FemSolver::static_equilibrium;
+    o.where = "s.yaml";
+    FemModel q = build_quadratic_fem_model(box.nodes, box.tets, test::fem_material(FemMaterialModel::neo_hookean));
+    FemBoundaryConditions supports;
+    supports.fixed_nodes = test::nodes_where(q, 0, 0.0);
+    FemEngine quadratic(std::move(q), std::move(supports), EmbeddedSurface(), {0, 0, 0}, o);
+    try {
+      quadratic.equilibrium({grab_end({8, 1, 1}), blade}, 0.1);
+      ADD_FAILURE() << "a blade on quadratic tets was accepted";
+    } catch (const InputError& err) {
+      EXPECT_EQ(err.field(), "tools[1] (cut)");
+    }
   }
   ToolInput probe = blade;
   probe.kind = ToolKind::probe;

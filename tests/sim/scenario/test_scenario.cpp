@@ -185,8 +185,11 @@ TEST(Scenario, FemKindsAndTheirRules) {
   const auto describe = ctsurg::sim::describe_scenario(s);
   EXPECT_NE(describe.find("\"tetmesh\": \"/b/t.h5\""), std::string::npos) << describe;
   EXPECT_EQ(describe.find("\"grid\""), std::string::npos) << describe;
-  EXPECT_NE(parse_error(base + "tools:\n  - cut: {blade_edge_mm: [0, 0, 1], path: [{t: 0, position_mm: [0, 0, 0]}]}\n")
-                .find("f.yaml: tools[0]: cut needs a spring model"),
+  // Linear tets are cut (fem/fem_cutting.h); quadratic ones are not.
+  EXPECT_EQ(parse_error(base + "tools:\n  - cut: {blade_edge_mm: [0, 0, 1], path: [{t: 0, position_mm: [0, 0, 0]}]}\n"), "(accepted)");
+  EXPECT_NE(parse_error(replaced(base, "solver: static\n", "solver: static\n  elements: quadratic\n") +
+                        "tools:\n  - cut: {blade_edge_mm: [0, 0, 1], path: [{t: 0, position_mm: [0, 0, 0]}]}\n")
+                .find("f.yaml: tools[0]: cut needs linear (4-node) tets"),
             std::string::npos);
   EXPECT_NE(parse_error(base + "tools:\n  - probe: {radius_mm: 2, path: [{t: 0, position_mm: [0, 0, 0]}]}\n").find("probe needs solver: dynamic"),
             std::string::npos);

@@ -17,7 +17,8 @@
 //
 // Backend::cuda runs the explicit dynamics and the iterative solves' conjugate gradients on the device;
 // the factorisations stay on the CPU. Probes need the explicit dynamics (contact is part of no other
-// solver); the FEM models do not cut. Restarts with a halved step are not offered (the implicit dynamics
+// solver); a blade separates linear tets and splits their nodes (fem_cutting.h: the solvers are rebuilt on
+// the new mesh with the state carried over). Restarts with a halved step are not offered (the implicit dynamics
 // halves a failing step itself).
 //
 // Metrics beyond the engine's common ones: newton_iterations and cg_iterations of the last static
@@ -33,6 +34,7 @@
 #include "ctsurg/sim/base/backend.h"
 #include "ctsurg/sim/base/particle_state.h"
 #include "ctsurg/sim/base/simulation_engine.h"
+#include "ctsurg/sim/fem/fem_cutting.h"
 #include "ctsurg/sim/fem/fem_explicit_dynamics.h"
 #include "ctsurg/sim/fem/fem_implicit_dynamics.h"
 #include "ctsurg/sim/fem/fem_linear_static_solver.h"
@@ -83,7 +85,9 @@ class FemEngine final : public SimulationEngine {
   const std::vector<double>& rest_positions() const override { return model_.nodes; }
   bool has_surface() const override { return !surface_.empty(); }
   std::vector<std::pair<std::string, std::string>> extra_metrics() const override;
-  double blade_sweep_mm() const override { return 0; }
+  // Linear tets: a quarter of the mean edge (a cut is tested against every interior face); 0 for
+  // quadratic ones (not cut).
+  double blade_sweep_mm() const override;
 
   bool quasi_static() const override { return options_.solver == FemSolver::static_equilibrium; }
   double dt() const override;
@@ -108,6 +112,9 @@ class FemEngine final : public SimulationEngine {
 
  private:
   void check_tools(const std::vector<ToolInput>& tools) const;
+  void make_solvers();
+  void apply_cuts(const std::vector<ToolInput>& tools);
+  void split_nodes(const std::vector<int32_t>& tets, const std::vector<int32_t>& parents, const std::vector<ToolInput>& tools);
   StabilityReport step_implicit(const std::vector<ToolInput>& tools, int steps);
 
   FemModel model_;
@@ -139,6 +146,11 @@ class FemEngine final : public SimulationEngine {
   std::vector<int32_t> grab_nodes_;  // scratch
   std::vector<double> grab_displacements_;
   std::vector<InstrumentView> instrument_views_;  // the active instruments at the last step
+  // Cutting (fem_cutting.h): the faces separated so far, and each surface vertex's tet and tie corners.
+  std::unique_ptr<FemTetSeparation> separation_;
+  std::vector<int32_t> surface_element_;  // #V
+  std::vector<int32_t> surface_corner_;   // #V x 8: the tet corner (0..3) of each tie, -1 for none
+  int64_t faces_cut_ = 0, triangles_removed_ = 0, nodes_split_ = 0;
 };
 
 }  // namespace ctsurg::sim

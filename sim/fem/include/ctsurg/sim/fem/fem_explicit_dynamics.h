@@ -105,6 +105,11 @@ class FemExplicitDynamics {
   std::vector<double> displacements() const;       // #N x 3 mm
   std::vector<double> positions() const;           // #N x 3 LPS mm, rest + u
   std::vector<Real> raw_displacements() const;     // #N x 3 mm, Real (the step's own values)
+  std::vector<Real> raw_previous_displacements() const;  // #N x 3 mm, Real: u one step ago (cpu)
+  // Continues from a state (u and u one step ago, #N x 3 mm; the clock and step count): after the
+  // model changed under a copy of it (a cut: fem_cutting.h). cpu only (InputError on cuda or a size
+  // mismatch).
+  void restore_state(const std::vector<Real>& u, const std::vector<Real>& u_prev, double time, int64_t steps);
   // Kinetic energy sum_i m_i |u_i(t) - u_i(t - dt)|^2 / (2 dt^2), nJ (backward-difference velocity;
   // cuda: the guard's device sum, whose order of additions differs from the CPU's serial sum).
   double kinetic_energy() const;

@@ -88,6 +88,9 @@ class FemImplicitDynamics {
   const std::vector<double>& displacements() const { return u_; }  // #N x 3 mm
   const std::vector<double>& velocities() const { return v_; }     // #N x 3 mm/s
   double kinetic_energy() const;   // sum_i m_i |v_i|^2 / 2, nJ
+  // Continues from a state (u mm and v mm/s, #N x 3; the clock and step count): after the model changed
+  // under a copy of it (a cut: fem_cutting.h). InputError on a size mismatch or a non-finite value.
+  void restore_state(const std::vector<double>& u, const std::vector<double>& v, double time, int64_t steps);
   double strain_energy() const;    // nJ (fem_strain_energy)
 
  private:

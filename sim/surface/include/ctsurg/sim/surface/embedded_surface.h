@@ -36,6 +36,11 @@ class EmbeddedSurface {
   // Cuts along the blade triangle; `vertices` are the surface's now (move()) and `positions` the nodes'.
   // Returns the number of triangles removed.
   int64_t cut(const Triangle& blade, const std::vector<float>& vertices, const ParticleState& positions);
+  // Removes the triangles crossing the blade, leaving the ties alone (remove_crossed_triangles).
+  int64_t cut_triangles(const Triangle& blade, const std::vector<float>& vertices);
+  // New node ids for every tie (#V x 8, as coupling().particles; weights kept): a model that split nodes
+  // (fem/fem_cutting.h) moves each vertex to the copies of its own element. InputError on a size mismatch.
+  void retie(std::vector<int32_t> particles);
 
  private:
   SurfaceCoupling coupling_;

@@ -25,6 +25,10 @@ struct SurfaceCutResult {
 
 // triangles: #F x 3 (kept in order, the crossed ones removed); vertices: #V x 3 current positions.
 // A vertex whose every slot lies across the blade keeps its slots (nothing to follow otherwise).
+// Only the first half: removes the triangles with an edge crossing the blade (kept in order); returns how
+// many. For a surface tied to elements that a cut keeps whole (the FEM's tets: fem/fem_cutting.h).
+int64_t remove_crossed_triangles(std::vector<uint32_t>& triangles, const std::vector<float>& vertices, const Triangle& blade);
+
 SurfaceCutResult cut_surface(std::vector<uint32_t>& triangles, SurfaceCoupling& coupling, const std::vector<float>& vertices,
                              const ParticleState& state, const Triangle& blade);
 
