@@ -89,7 +89,7 @@ void HashContacts(benchmark::State& state) {
     benchmark::DoNotOptimize(c.data());
   }
   counters(state, s, contacts);
-  state.counters["threads"] = static_cast<double>(o.threads);
+  state.counters["omp_threads"] = static_cast<double>(o.threads);
 }
 
 // The table alone (the build's share of a step).
@@ -103,7 +103,7 @@ void HashBuild(benchmark::State& state) {
   }
   counters(state, s, 0);
   state.counters["entries_per_primitive"] = static_cast<double>(entries) / static_cast<double>(s.triangle_object.size());
-  state.counters["threads"] = static_cast<double>(state.range(1));
+  state.counters["omp_threads"] = static_cast<double>(state.range(1));
 }
 
 // CGAL's AABB tree: rebuilt, queried with each vertex's cube, candidates checked by the same exact test.
@@ -158,7 +158,7 @@ void CgalAabbTreeContacts(benchmark::State& state) {
   const auto hashed = vertex_triangle_contacts(s.positions, s.triangles, s.vertex_object, s.triangle_object, kDistance);
   if (static_cast<int64_t>(hashed.size()) != contacts) state.SkipWithError("CGAL and the hash disagree");
   counters(state, s, contacts);
-  state.counters["threads"] = 1;
+  state.counters["omp_threads"] = 1;
 }
 
 void BruteForceContacts(benchmark::State& state) {
@@ -171,7 +171,7 @@ void BruteForceContacts(benchmark::State& state) {
     benchmark::DoNotOptimize(c.data());
   }
   counters(state, s, contacts);
-  state.counters["threads"] = 1;
+  state.counters["omp_threads"] = 1;
 }
 
 // Vertices in tets: a box of Kuhn tets (1 mm cells at z = 650) and as many random points as nodes.
@@ -217,7 +217,7 @@ void HashTetContacts(benchmark::State& state) {
   state.counters["contacts"] = static_cast<double>(contacts);
   state.counters["ns_per_primitive"] =
       benchmark::Counter(t * 1e-9, benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
-  state.counters["threads"] = static_cast<double>(o.threads);
+  state.counters["omp_threads"] = static_cast<double>(o.threads);
 }
 
 void sizes(benchmark::internal::Benchmark* b, std::initializer_list<int64_t> triangles,

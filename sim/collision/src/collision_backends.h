@@ -20,7 +20,8 @@ void check_primitives(std::span<const uint32_t> primitives, int corners, int64_t
                       const char* field, int threads);
 // Throws InputError(where, field, ...) unless ids has `count` entries.
 void check_objects(std::span<const uint32_t> ids, int64_t count, const char* where, const char* field);
-// The cell edge: `requested` (> 0), else the primitives' average edge length, else 1 mm. Throws
+// The cell edge: `requested` (> 0), else the primitives' average edge length (1 mm when that is 0), at
+// least 2^-18 of the largest |coordinate| + margin. Throws
 // InputError(where, "cell_size", ...) for a negative or non-finite request, or one so small that the
 // largest |coordinate| + margin is more than 2^19 cells from the origin (so that cell coordinates and a
 // box's cell count fit in 64 bits).

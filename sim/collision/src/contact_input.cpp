@@ -68,8 +68,12 @@ double hash_cell_size(std::span<const double> positions, std::span<const uint32_
     throw InputError(where, "cell_size", "must be finite and >= 0 mm (0: the average edge length), got " +
                                              std::to_string(requested));
   double cell = requested;
-  if (cell == 0) cell = average_edge_length_unchecked(positions, primitives, corners, threads);
-  if (!(cell > 0)) cell = 1;  // no primitives, or only points: any cell works
+  if (cell == 0) {
+    cell = average_edge_length_unchecked(positions, primitives, corners, threads);
+    if (!(cell > 0)) cell = 1;  // no primitives, or only points: any cell works
+    // Tiny primitives far from the origin: the smallest cell the coordinates allow (a chosen cell never fails).
+    cell = std::max(cell, 2 * (max_abs_coordinate + margin) / kMaxCellsFromOrigin);
+  }
   if ((max_abs_coordinate + margin) / cell > kMaxCellsFromOrigin)
     throw InputError(where, "cell_size",
                      std::to_string(cell) + " mm is too small for coordinates up to " +

@@ -54,10 +54,12 @@ uint32_t hash_table_size(int64_t entries);
 //   primitives #P x corners row-major vertex indices (< #V), corners 3 (triangles) or 4 (tetrahedra)
 //   margin     mm (>= 0): each primitive's bounding box is enlarged by it on every side (the query
 //              distance of a proximity query)
-//   cell_size  mm: the cell edge; 0 picks Teschner's rule (average_edge_length; 1 mm when that is 0)
+//   cell_size  mm: the cell edge; 0 picks Teschner's rule (average_edge_length; 1 mm when that is 0; at
+//              least 2^-18 of the largest |coordinate| + margin, so that cell coordinates stay small)
 // Throws InputError("spatial hash", <field>, ...) for a wrong shape, an index out of range, a value not
-// finite, a negative margin or cell size, or cells so small that the boxes cover more than 2^31 cells
-// (or the scene more than 2^20 cells along an axis).
+// finite, a negative margin or cell size, or a cell size so small that the boxes cover more than 2^31 - 1
+// cells or a coordinate is more than 2^19 cells from the origin. A margin much larger than the cell
+// puts each primitive in about (1 + 2 margin / cell)^3 cells: pass a larger cell_size then.
 SpatialHash build_spatial_hash(std::span<const double> positions, std::span<const uint32_t> primitives, int corners,
                                double margin, double cell_size = 0, int threads = 0);
 
