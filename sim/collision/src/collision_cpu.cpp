@@ -78,13 +78,20 @@ SpatialHash build_hash_cpu(const HashedPrimitivesView& p, double cell_size, cons
   // 3. count, scan, fill.
   hash.offsets.assign(n + 1, 0);
   hash.entries.resize(entries);
-#pragma omp parallel for schedule(static) num_threads(t)
-  for (int64_t i = 0; i < p.count; ++i) count_primitive(p, hash.shape, hash.offsets.data(), i);
-  exclusive_scan(hash.offsets.data(), n + 1, threads);
   std::vector<uint32_t> cursors(n, 0);
+  if (t == 1) {  // plain increments (spatial_hash_impl.h's fetch_increment)
+    for (int64_t i = 0; i < p.count; ++i) count_primitive<false>(p, hash.shape, hash.offsets.data(), i);
+    exclusive_scan(hash.offsets.data(), n + 1, 1);
+    for (int64_t i = 0; i < p.count; ++i)
+      fill_primitive<false>(p, hash.shape, hash.offsets.data(), cursors.data(), hash.entries.data(), i);
+  } else {
 #pragma omp parallel for schedule(static) num_threads(t)
-  for (int64_t i = 0; i < p.count; ++i)
-    fill_primitive(p, hash.shape, hash.offsets.data(), cursors.data(), hash.entries.data(), i);
+    for (int64_t i = 0; i < p.count; ++i) count_primitive<true>(p, hash.shape, hash.offsets.data(), i);
+    exclusive_scan(hash.offsets.data(), n + 1, threads);
+#pragma omp parallel for schedule(static) num_threads(t)
+    for (int64_t i = 0; i < p.count; ++i)
+      fill_primitive<true>(p, hash.shape, hash.offsets.data(), cursors.data(), hash.entries.data(), i);
+  }
   // 4. each bucket in primitive order.
   const int tb = cpu::thread_count(threads, n);
 #pragma omp parallel for schedule(static) num_threads(tb)

@@ -33,13 +33,13 @@ __global__ void __launch_bounds__(kBlock) cell_count_kernel(HashedPrimitivesView
 
 __global__ void __launch_bounds__(kBlock) bucket_count_kernel(HashedPrimitivesView p, HashGridShape s, uint32_t* counts) {
   const int64_t i = thread_index();
-  if (i < p.count) count_primitive(p, s, counts, i);
+  if (i < p.count) count_primitive<true>(p, s, counts, i);
 }
 
 __global__ void __launch_bounds__(kBlock) fill_kernel(HashedPrimitivesView p, HashGridShape s, const uint32_t* offsets,
                                                       uint32_t* cursors, uint32_t* entries) {
   const int64_t i = thread_index();
-  if (i < p.count) fill_primitive(p, s, offsets, cursors, entries, i);
+  if (i < p.count) fill_primitive<true>(p, s, offsets, cursors, entries, i);
 }
 
 __global__ void __launch_bounds__(kBlock) sort_kernel(const uint32_t* offsets, uint32_t* entries, int64_t buckets) {

@@ -44,7 +44,9 @@ TEST(SpatialHash, TeschnerHashFunction) {
   EXPECT_EQ(teschner_hash(1, 0, 0, 1000003), 73856093u % 1000003u);
   EXPECT_EQ(teschner_hash(0, 1, 0, 1000003), 19349663u % 1000003u);
   EXPECT_EQ(teschner_hash(0, 0, 1, 1000003), 83492791u % 1000003u);
-  EXPECT_EQ(teschner_hash(2, 3, 5, 1000003), ((2ull * 73856093) ^ (3ull * 19349663) ^ (5ull * 83492791)) % 1000003);
+  EXPECT_EQ(teschner_hash(2, 3, 5, 1000003), ((2u * 73856093u) ^ (3u * 19349663u) ^ (5u * 83492791u)) % 1000003u);
+  // 32-bit products wrap: 100 * 83492791 > 2^32.
+  EXPECT_EQ(teschner_hash(0, 0, 100, 1000003), static_cast<uint32_t>(100ull * 83492791ull % (1ull << 32)) % 1000003u);
   // Negative cells wrap as unsigned: defined, and different from their mirror images.
   EXPECT_LT(teschner_hash(-1, -2, -3, 101), 101u);
   EXPECT_NE(teschner_hash(-1, 0, 0, 1000003), teschner_hash(1, 0, 0, 1000003));

@@ -24,7 +24,7 @@
 namespace ctsurg::sim {
 
 // Teschner's three large primes (section 4.1).
-constexpr uint64_t kHashPrime1 = 73856093, kHashPrime2 = 19349663, kHashPrime3 = 83492791;
+constexpr uint32_t kHashPrime1 = 73856093, kHashPrime2 = 19349663, kHashPrime3 = 83492791;
 
 // The primitives that go into the table: `corners` vertex indices per primitive into #V x 3 positions.
 struct HashedPrimitivesView {
@@ -53,11 +53,13 @@ CTSURG_HD inline int64_t cell_coordinate(double x, double cell_size) {
   return static_cast<int64_t>(floor(x / cell_size));
 }
 
-// H(i, j, k): unsigned arithmetic (a negative coordinate wraps, identically on host and device).
+// H(i, j, k) in 32-bit unsigned arithmetic, as Teschner's 32-bit integers (products wrap modulo 2^32; a
+// negative coordinate wraps too, identically on host and device); a 32-bit remainder (the build
+// computes one per entry: a 64-bit division would cost about twice as much).
 CTSURG_HD inline uint32_t teschner_hash(int64_t i, int64_t j, int64_t k, uint32_t table_size) {
-  const uint64_t h = (static_cast<uint64_t>(i) * kHashPrime1) ^ (static_cast<uint64_t>(j) * kHashPrime2) ^
-                     (static_cast<uint64_t>(k) * kHashPrime3);
-  return static_cast<uint32_t>(h % table_size);
+  const uint32_t h = (static_cast<uint32_t>(i) * kHashPrime1) ^ (static_cast<uint32_t>(j) * kHashPrime2) ^
+                     (static_cast<uint32_t>(k) * kHashPrime3);
+  return h % table_size;
 }
 
 CTSURG_HD inline uint32_t point_bucket(const double* p, const HashGridShape& s) {
@@ -108,25 +110,32 @@ CTSURG_HD inline int64_t cell_count(const CellBox& b) {
   return (b.hi[0] - b.lo[0] + 1) * (b.hi[1] - b.lo[1] + 1) * (b.hi[2] - b.lo[2] + 1);
 }
 
-// Atomic increment returning the old value (relaxed: only the counts matter, the fill is sorted after).
+// Increment returning the old value: atomic (relaxed: only the counts matter, the fill is sorted
+// after) where several threads share the table, plain where one thread builds it (a locked instruction
+// on x86 also orders memory, which stops the scattered accesses of these passes from overlapping).
+template <bool kAtomic>
 CTSURG_HD inline uint32_t fetch_increment(uint32_t* value) {
 #if defined(__CUDA_ARCH__)
   return atomicAdd(value, 1u);
 #else
-  return __atomic_fetch_add(value, 1u, __ATOMIC_RELAXED);
+  if constexpr (kAtomic) return __atomic_fetch_add(value, 1u, __ATOMIC_RELAXED);
+  else return (*value)++;
 #endif
 }
 
 // Pass 1 for primitive i: one count in the bucket of each cell of its box.
+template <bool kAtomic>
 CTSURG_HD inline void count_primitive(const HashedPrimitivesView& p, const HashGridShape& s, uint32_t* bucket_counts,
                                       int64_t i) {
   const CellBox b = primitive_cells(p, s.cell_size, i);
   for (int64_t z = b.lo[2]; z <= b.hi[2]; ++z)
     for (int64_t y = b.lo[1]; y <= b.hi[1]; ++y)
-      for (int64_t x = b.lo[0]; x <= b.hi[0]; ++x) fetch_increment(&bucket_counts[teschner_hash(x, y, z, s.table_size)]);
+      for (int64_t x = b.lo[0]; x <= b.hi[0]; ++x)
+        fetch_increment<kAtomic>(&bucket_counts[teschner_hash(x, y, z, s.table_size)]);
 }
 
 // Pass 3 for primitive i (after the prefix sum): its index into each bucket, at the bucket's cursor.
+template <bool kAtomic>
 CTSURG_HD inline void fill_primitive(const HashedPrimitivesView& p, const HashGridShape& s, const uint32_t* offsets,
                                      uint32_t* cursors, uint32_t* entries, int64_t i) {
   const CellBox b = primitive_cells(p, s.cell_size, i);
@@ -134,7 +143,7 @@ CTSURG_HD inline void fill_primitive(const HashedPrimitivesView& p, const HashGr
     for (int64_t y = b.lo[1]; y <= b.hi[1]; ++y)
       for (int64_t x = b.lo[0]; x <= b.hi[0]; ++x) {
         const uint32_t h = teschner_hash(x, y, z, s.table_size);
-        entries[offsets[h] + fetch_increment(&cursors[h])] = static_cast<uint32_t>(i);
+        entries[offsets[h] + fetch_increment<kAtomic>(&cursors[h])] = static_cast<uint32_t>(i);
       }
 }
 
