@@ -1,20 +1,20 @@
 // The spatial hash of Teschner et al. 2003 ("Optimized Spatial Hashing for Collision Detection of
-// Deformable Objects", VMV 2003; the FEM paper, section 3.3, finds its contacts with it): primitives
-// (triangles or tetrahedra) entered in a hash table over a uniform grid of cubic cells, rebuilt from
-// scratch every step in time linear in the primitives, and queried with vertices, each of which reads
-// one bucket (kernels/spatial_hash_impl.h has the hash function and the passes).
+// Deformable Objects", VMV 2003; the FEM paper, section 3.3, detects collisions by spatial hashing):
+// primitives (triangles or tetrahedra) entered in a hash table over a uniform grid of cubic cells,
+// rebuilt from scratch every step in time linear in the primitives, and queried with vertices, each of
+// which reads one bucket (kernels/spatial_hash_impl.h has the hash function and the passes).
 //
 // Build (counting sort, so that the output is allocated once and the table does not depend on the
 // thread schedule, as VTK's FlyingEdges counts, prefix-sums and writes):
 //   1. each primitive's box (its bounding box enlarged by a margin) covers c_i cells; E = sum c_i;
-//   2. the table size n is the smallest prime >= E (Teschner, section 4.2: a prime, about the number of
+//   2. the table size n is the smallest prime >= E (Teschner et al.: a prime, about the number of
 //      entries, keeps collisions rare);
 //   3. count the entries of each bucket, exclusive prefix sum to offsets, fill at atomic cursors;
 //   4. sort each bucket by primitive index.
 // Cost O(#P + E + n) time and memory; E is #P times a small constant when the cells are about the
 // primitives' size, which Teschner's rule gives: the cell edge is the average edge length of the hashed
-// primitives (section 5.1: smaller cells put a primitive in many cells, larger ones many primitives in
-// one cell).
+// primitives (the paper's parameter study: smaller cells put a primitive in many cells, larger ones
+// many primitives in one cell).
 //
 // Units: positions in mm, in any frame (the local frame of the simulation); all of a call's positions in
 // the same frame.

@@ -53,8 +53,9 @@ CTSURG_HD inline double closest_on_segment(const double* p, const double* a, con
   return t < 0 ? 0 : (t > 1 ? 1 : t);
 }
 
-// A triangle whose normal is tiny against its edges (sin^2 of its largest angle's supplement below
-// 1e-14, or a zero edge): Ericson's region tests divide by |n|^2, so it is treated as its three edges.
+// A triangle whose normal is tiny against the edges at a (|n|^2 = |ab|^2 |ac|^2 sin^2(angle at a), the
+// sine squared below 1e-14, or a zero edge): Ericson's region tests divide by |n|^2, so it is treated
+// as its three edges.
 CTSURG_HD inline bool degenerate_triangle(const double* ab, const double* ac, const double* n) {
   return !(dot3(n, n) > 1e-14 * dot3(ab, ab) * dot3(ac, ac));
 }

@@ -2,7 +2,7 @@
 // OpenMP) and CUDA (spatial_hash_cuda.cu).
 //
 // Teschner, Heidelberger, Mueller, Pomeranets, Gross 2003, "Optimized Spatial Hashing for Collision
-// Detection of Deformable Objects", section 4: space is cut into cubic cells of edge l; a point (x, y, z)
+// Detection of Deformable Objects" (VMV 2003): space is cut into cubic cells of edge l; a point (x, y, z)
 // lies in cell (floor(x / l), floor(y / l), floor(z / l)), and cell (i, j, k) goes to bucket
 //   H(i, j, k) = (i p1 xor j p2 xor k p3) mod n,   p1 = 73856093, p2 = 19349663, p3 = 83492791,
 // n the table size (a prime). Every primitive (triangle, tetrahedron) is entered in the bucket of each
@@ -23,7 +23,7 @@
 
 namespace ctsurg::sim {
 
-// Teschner's three large primes (section 4.1).
+// Teschner's three large primes.
 constexpr uint32_t kHashPrime1 = 73856093, kHashPrime2 = 19349663, kHashPrime3 = 83492791;
 
 // The primitives that go into the table: `corners` vertex indices per primitive into #V x 3 positions.
