@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Reruns every benchmark with one command and rewrites docs/benchmarks.md (machine and date included).
 #   bench/run.sh                 build (Release) if needed, then run every section
-#   bench/run.sh render fem      only these sections (preprocess tetmesh surface sim render fem instruments kidney accuracy);
+#   bench/run.sh render fem      only these sections (preprocess tetmesh surface sim render fem collision instruments
+#                                kidney accuracy);
 #                                the others in docs/benchmarks.md stay as they are
 #   BUILD=build-dev bench/run.sh fem        an existing build folder (brought up to date) instead of the release preset
 #   TVE_OUT=DIR bench/run.sh accuracy       the tables of a finished bench/time_vs_error.sh run in DIR, not a new run
@@ -303,13 +304,33 @@ if want instruments; then
     echo "date: $(date -u +%Y-%m-%d); ctsurg $(git describe --always --dirty 2>/dev/null || echo unknown), Release build."
     echo "\`build/bin/bench_instruments\` (docs/sim.md, \"Instruments\"): BM_Bake/k loads bundled instrument k and bakes its"
     echo "signed distance grid (once per run); BM_HeartStep/tool/threads is one step of the heart's 2.4 mm spring grid with"
-    echo "no tool (0), the 5 mm sphere probe (1) or instrument k (2 + k) pressed 6 mm into the anterior wall (in_contact:"
+    echo "no tool (0), the 5 mm sphere probe (1) or instrument k (2 + k) pressed 3 mm into the anterior wall (in_contact:"
     echo "particles it pushed when placed); BM_PushOut/N/threads is the contact pass alone over N particles spread through"
     echo "the retractor's box. Load average at the start: $(cut -d' ' -f1-3 /proc/loadavg)."
     echo
     "$BIN/bench_instruments" --benchmark_format=json 2>/dev/null | gbench_table
   } >"$ins"
   splice instruments "$ins"
+fi
+
+# Collision: bench_collision (the spatial hash rebuilt and queried each step, against CGAL's AABB tree and
+# brute force on the same vertex-triangle queries; vertex-in-tet on a tet box).
+if want collision; then
+  col=$WORK/collision.md
+  {
+    echo "## Collision: spatial hash against CGAL's AABB tree and brute force (\`bench/run.sh collision\`)"
+    echo
+    machine_line
+    echo "date: $(date -u +%Y-%m-%d); ctsurg $(git describe --always --dirty 2>/dev/null || echo unknown), Release build."
+    echo "\`build/bin/bench_collision\`: two crossing wavy sheets of 1 mm triangles at z = 650 mm (objects 0 and 1), every"
+    echo "vertex against the other object's triangles within 0.2 mm; each step builds the structure from scratch."
+    echo "ns_per_primitive = time / #F (flat: linear time). CGAL: AABB tree built and queried on one thread, candidates"
+    echo "checked by the same exact test; threads 0 = the library's default rule. Load average at the start:"
+    echo "$(cut -d' ' -f1-3 /proc/loadavg)."
+    echo
+    "$BIN/bench_collision" --benchmark_format=json 2>/dev/null | gbench_table
+  } >"$col"
+  splice collision "$col"
 fi
 
 # The FEM paper's kidney experiment (bench/kidney_experiment.sh; needs ../shared/data/abdomen).
