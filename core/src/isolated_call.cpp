@@ -5,12 +5,15 @@
 #include "ctsurg/core/library_messages.h"
 
 #include <fcntl.h>
+#include <poll.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <nlohmann/json.hpp>
 
 #include <cerrno>
+#include <chrono>
+#include <cmath>
 #include <csignal>
 #include <cstdlib>
 #include <cstdio>
@@ -46,7 +49,7 @@ std::string outcome(const nlohmann::json& head, std::string_view bytes = {}) {
 }  // namespace
 
 std::string isolated_call(const std::string& input, const std::function<std::string(const ProgressReport& progress)>& work,
-                          const ProgressReport& on_progress) {
+                          const ProgressReport& on_progress, double timeout_s) {
   const int result = anonymous_file(), printed_fd = anonymous_file();
   int ticks[2];
   if (result < 0 || printed_fd < 0 || ::pipe2(ticks, O_CLOEXEC) != 0) {
@@ -79,8 +82,25 @@ std::string isolated_call(const std::string& input, const std::function<std::str
     std::_Exit(0);  // no destructors or exit handlers of the parent's objects in the child
   }
   ::close(ticks[1]);
+  // The child's progress until it closes its end (it exits); with a time limit, polled against the
+  // deadline, and a child past it is killed: a library looping on a damaged header must not hang the tool.
+  const auto start = std::chrono::steady_clock::now();
+  bool timed_out = false;
   uint64_t report[2];
-  for (ssize_t n; (n = ::read(ticks[0], report, sizeof report)) != 0;) {
+  for (;;) {
+    if (timeout_s > 0) {
+      const double left = timeout_s - std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      pollfd p{ticks[0], POLLIN, 0};
+      const int ready = left > 0 ? ::poll(&p, 1, static_cast<int>(std::ceil(left * 1000))) : 0;
+      if (ready < 0 && errno == EINTR) continue;
+      if (ready == 0) {
+        ::kill(pid, SIGKILL);
+        timed_out = true;
+        break;
+      }
+    }
+    const ssize_t n = ::read(ticks[0], report, sizeof report);
+    if (n == 0) break;
     if (n < 0 && errno == EINTR) continue;
     if (n != static_cast<ssize_t>(sizeof report)) break;
     if (on_progress) on_progress(report[0], report[1]);
@@ -93,6 +113,13 @@ std::string isolated_call(const std::string& input, const std::function<std::str
   const std::string printed = folded_text(read_all(printed_fd));
   ::close(result);
   ::close(printed_fd);
+  if (timed_out) {
+    char limit[32];
+    std::snprintf(limit, sizeof limit, "%g", timeout_s);
+    throw InputError(input, "", with_library_text(std::string("the reading library did not finish within ") + limit +
+                                                      " s: a damaged file (a header the library loops on)",
+                                                  printed));
+  }
   if (WIFSIGNALED(status) || !WIFEXITED(status) || WEXITSTATUS(status) != 0 || text.empty()) {
     const std::string how = WIFSIGNALED(status) ? std::string("crashed (") + strsignal(WTERMSIG(status)) + ")" : "failed";
     throw InputError(input, "", with_library_text("the reading library " + how + " on it: a damaged file", printed));

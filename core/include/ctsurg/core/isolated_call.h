@@ -19,10 +19,10 @@
 namespace ctsurg {
 
 // Runs work(progress) in a child process and returns its bytes. InputError(input, "", ...) when the
-// child dies of a signal (naming it, with what the libraries printed); RuntimeError when it cannot
-// be started.
+// child dies of a signal (naming it, with what the libraries printed) or, with timeout_s > 0, is still
+// running after timeout_s seconds (it is killed); RuntimeError when it cannot be started.
 using ProgressReport = std::function<void(uint64_t done, uint64_t total)>;
 std::string isolated_call(const std::string& input, const std::function<std::string(const ProgressReport& progress)>& work,
-                          const ProgressReport& on_progress = {});
+                          const ProgressReport& on_progress = {}, double timeout_s = 0);
 
 }  // namespace ctsurg
