@@ -36,13 +36,19 @@ void build_csr(int32_t count, std::vector<std::pair<int32_t, int32_t>>& pairs, s
 
 }  // namespace
 
-FemTetSeparation::FemTetSeparation(const FemModel& model) {
-  if (model.order != 1) throw InputError("fem cut", "elements", "cutting needs linear (4-node) tets; quadratic elements are not cut");
-  const int32_t nt = model.tet_count(), nn = model.node_count();
+FemTetSeparation::FemTetSeparation(const FemModel& model)
+    : FemTetSeparation(model.order == 1 ? model.tets : std::vector<int32_t>{}, model.order == 1 ? model.node_count() : -1) {}
+
+FemTetSeparation::FemTetSeparation(const std::vector<int32_t>& tets, int32_t node_count) {
+  if (node_count < 0) throw InputError("fem cut", "elements", "cutting needs linear (4-node) tets; quadratic elements are not cut");
+  if (tets.size() % 4 != 0) throw InputError("fem cut", "elements", "expected #T x 4 node ids");
+  for (const int32_t n : tets)
+    if (n < 0 || n >= node_count) throw InputError("fem cut", "elements", "node id " + std::to_string(n) + " out of range");
+  const int32_t nt = static_cast<int32_t>(tets.size() / 4), nn = node_count;
   std::vector<std::pair<std::array<int32_t, 3>, int32_t>> all;  // (sorted face nodes, element)
   all.reserve(4 * static_cast<size_t>(nt));
   for (int32_t e = 0; e < nt; ++e) {
-    const int32_t* t = &model.tets[4 * static_cast<size_t>(e)];
+    const int32_t* t = &tets[4 * static_cast<size_t>(e)];
     for (int skip = 0; skip < 4; ++skip) {
       std::array<int32_t, 3> f{};
       int k = 0;
@@ -66,7 +72,7 @@ FemTetSeparation::FemTetSeparation(const FemModel& model) {
   std::iota(original_.begin(), original_.end(), 0);
   std::vector<std::pair<int32_t, int32_t>> node_tet, node_face;
   for (int32_t e = 0; e < nt; ++e)
-    for (int a = 0; a < 4; ++a) node_tet.emplace_back(model.tets[4 * static_cast<size_t>(e) + static_cast<size_t>(a)], e);
+    for (int a = 0; a < 4; ++a) node_tet.emplace_back(tets[4 * static_cast<size_t>(e) + static_cast<size_t>(a)], e);
   for (size_t f = 0; f < faces_.size(); ++f)
     for (const int32_t n : faces_[f].nodes) node_face.emplace_back(n, static_cast<int32_t>(f));
   build_csr(nn, node_tet, tet_offsets_, tet_list_);
@@ -109,6 +115,11 @@ FemCutResult FemTetSeparation::cut(std::vector<int32_t>& tets, int32_t node_coun
     ++r.faces_separated;
     touched.insert(touched.end(), faces_[f].nodes, faces_[f].nodes + 3);
   }
+  split(tets, node_count, touched, r);
+  return r;
+}
+
+void FemTetSeparation::split(std::vector<int32_t>& tets, int32_t node_count, std::vector<int32_t>& touched, FemCutResult& r) {
   std::sort(touched.begin(), touched.end());
   touched.erase(std::unique(touched.begin(), touched.end()), touched.end());
   for (const int32_t n : touched) {
@@ -152,6 +163,23 @@ FemCutResult FemTetSeparation::cut(std::vector<int32_t>& tets, int32_t node_coun
       }
     }
   }
+}
+
+FemCutResult FemTetSeparation::separate_where(std::vector<int32_t>& tets, int32_t node_count,
+                                              const std::function<bool(int32_t a, int32_t b)>& separate) {
+  if (static_cast<size_t>(node_count) != original_.size()) {
+    throw InputError("fem cut", "nodes", "the mesh has " + std::to_string(node_count) + " nodes; the separation knows " +
+                                             std::to_string(original_.size()) + " (every cut must go through this object)");
+  }
+  FemCutResult r;
+  std::vector<int32_t> touched;
+  for (size_t f = 0; f < faces_.size(); ++f) {
+    if (separated_[f] || !separate(faces_[f].a, faces_[f].b)) continue;
+    separated_[f] = 1;
+    ++r.faces_separated;
+    touched.insert(touched.end(), faces_[f].nodes, faces_[f].nodes + 3);
+  }
+  split(tets, node_count, touched, r);
   return r;
 }
 

@@ -89,6 +89,9 @@ FemEngine::FemEngine(FemModel model, FemBoundaryConditions supports, EmbeddedSur
     throw InputError(options_.where, "fixed", "the explicit dynamics fixes whole nodes; fixing some axes needs the static or implicit solver");
   }
   if (options_.solver == FemSolver::dynamic) counts_.critical_dt_s = fem_critical_time_step(model_, options_.safety_factor).critical;
+  if (options_.contact.enabled && options_.solver != FemSolver::dynamic) {
+    throw InputError(options_.where, "contact", "contact needs solver: dynamic (it is part of the explicit dynamics)");
+  }
   make_solvers();
 }
 
@@ -101,6 +104,7 @@ void FemEngine::make_solvers() {
     o.mass_damping = options_.mass_damping;
     o.gravity = options_.gravity;
     o.threads = options_.threads;
+    o.contact = options_.contact;
     dynamics_.reset();
     dynamics_.emplace(model_, o, backend_);
     dynamics_->set_fixed_nodes(supports_.fixed_nodes);

@@ -142,6 +142,12 @@ FemExplicitDynamics::FemExplicitDynamics(const FemModel& model, const FemDynamic
     u_next_.assign(n3, 0);
     corner_forces_.assign(12 * static_cast<std::size_t>(model.tet_count()), 0);
   }
+  if (o.contact.enabled) {
+    if (device_) throw InputError(kWhere, "contact", "contact between bodies runs on the cpu backend only; set backend: cpu");
+    FemContactOptions c = o.contact;
+    if (c.threads == 0) c.threads = o.threads;
+    contact_ = std::make_unique<FemContact>(model, c);
+  }
   update_inverse_mass();
 }
 
@@ -242,6 +248,7 @@ void FemExplicitDynamics::step(int steps) {
     for (const InstrumentView& v : instruments_)
       contacts_ += cpu::fem_instrument_contact(u_next_.data(), model_.nodes.data(), inv_mass_.data(), model_.node_count(), v,
                                                options_.threads);
+    if (contact_) contacts_ += contact_->resolve(model_, u_next_.data(), inv_mass_.data());
     u_prev_.swap(u_);
     u_.swap(u_next_);
     time_ += dt_;

@@ -237,7 +237,7 @@ static Scenario parse_fields(const std::string& text, const fs::path& file, cons
   }
   const YamlField top(doc, "", &name);
   if (!top.is_map()) top.fail("a scenario is a map of sections (name, model, material, time, output, ...)");
-  top.only({"ctsurg_scenario", "name", "model", "material", "gravity_mm_per_s2", "fixed", "tools", "time", "output",
+  top.only({"ctsurg_scenario", "name", "model", "material", "gravity_mm_per_s2", "fixed", "tools", "contact", "time", "output",
             "render", "backend", "threads", "solver"});
   Scenario s;
   s.file = file;
@@ -393,6 +393,30 @@ static Scenario parse_fields(const std::string& text, const fs::path& file, cons
   }
   if (top.has("backend")) s.backend = top.child("backend").one_of({"cpu", "cuda", "auto"});
   if (top.has("threads")) s.threads = static_cast<int>(top.child("threads").integer(0, 1024));
+  if (top.has("contact")) {
+    const YamlField c = top.child("contact");
+    if (s.model != ModelKind::fem || s.fem_solver != FemSolver::dynamic || s.fem_order != 1) {
+      c.fail("only for kind: fem with solver: dynamic and linear elements (contact is part of the explicit dynamics)");
+    }
+    c.only({"self", "distance_mm", "bodies"});
+    s.contact.enabled = true;
+    if (c.has("self")) s.contact.self = c.child("self").boolean();
+    if (c.has("distance_mm")) s.contact.distance_mm = c.child("distance_mm").positive();
+    if (c.has("bodies")) {
+      const YamlField b = c.child("bodies");
+      b.only({"labels", "planes", "gap_mm"});
+      if (b.has("gap_mm")) s.contact.gap_mm = b.child("gap_mm").non_negative();
+      if (b.has("labels")) s.contact.split_labels = b.child("labels").boolean();
+      if (b.has("planes")) {
+        for (const auto& item : b.child("planes").items()) {
+          item.only({"point_mm", "normal"});
+          HalfSpace h{item.child("point_mm").vec3(), item.child("normal").vec3()};
+          if (h.normal == std::array<double, 3>{0, 0, 0}) item.child("normal").fail("must not be zero");
+          s.contact.split_planes.push_back(h);
+        }
+      }
+    }
+  }
   if (top.has("solver")) {
     if (s.model != ModelKind::fem || s.fem_solver == FemSolver::dynamic)
       top.child("solver").fail("only for kind: fem with solver: static or implicit (the Newton solves' settings)");

@@ -6,6 +6,7 @@
 #include "ctsurg/core/tet_mesh_file.h"
 #include "ctsurg/sim/base/backend.h"
 #include "ctsurg/sim/base/fixed_regions.h"
+#include "ctsurg/sim/fem/fem_contact.h"
 #include "ctsurg/sim/fem/fem_engine.h"
 #include "ctsurg/sim/fem/fem_explicit_dynamics.h"
 #include "ctsurg/sim/fem/kernels/fem_quadratic_element_impl.h"
@@ -195,6 +196,21 @@ ScenarioEngine fem_engine(const Scenario& s, Backend backend, const std::functio
   const Vec3 origin = local_origin({0.5 * (lps_bounds.lo[0] + lps_bounds.hi[0]), 0.5 * (lps_bounds.lo[1] + lps_bounds.hi[1]),
                                     0.5 * (lps_bounds.lo[2] + lps_bounds.hi[2])});
   for (size_t i = 0; i < mesh.nodes.size(); ++i) mesh.nodes[i] -= origin[i % 3];
+  if (s.contact.enabled && (s.contact.split_labels || !s.contact.split_planes.empty())) {
+    // The bodies: faces between labels or across planes separated before anything else reads the mesh
+    // (the fixed regions, the surface's embedding and the model all see the bodies apart).
+    std::vector<HalfSpace> planes = s.contact.split_planes;
+    for (HalfSpace& h : planes)
+      for (size_t a = 0; a < 3; ++a) h.point[a] -= origin[a];
+    const BodySeparation b = separate_bodies(mesh, s.contact.split_labels, planes, s.contact.gap_mm);
+    if (b.nodes_split == 0 && b.tets_removed == 0) {
+      throw InputError(sfile, "contact.bodies", "separates nothing: the labels or planes do not cross the mesh");
+    }
+    if (note) {
+      note("contact: bodies apart along " + std::to_string(b.faces) + " faces (" + std::to_string(b.nodes_split) + " nodes split, " +
+           std::to_string(b.tets_removed) + " tets taken out by the gap)");
+    }
+  }
   FemMaterial material;
   material.model = s.material_law;
   material.youngs_modulus = s.material.youngs_modulus_pa;
@@ -243,6 +259,9 @@ ScenarioEngine fem_engine(const Scenario& s, Backend backend, const std::functio
   o.newton.tolerance_mm = s.solver.tolerance_mm;
   o.newton.max_newton_iterations = s.solver.max_newton_iterations;
   o.newton.cg_max_iterations = s.solver.max_cg_iterations;
+  o.contact.enabled = s.contact.enabled;
+  o.contact.self = s.contact.self;
+  o.contact.distance_mm = s.contact.distance_mm;
   if (s.fem_solver == FemSolver::implicit) o.dt = s.dt_s;  // 0: a frame's 1/60 s
   std::optional<FemCriticalStep> crit;
   if (s.fem_solver == FemSolver::dynamic) {

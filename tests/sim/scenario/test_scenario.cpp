@@ -247,6 +247,27 @@ TEST(Scenario, InstrumentsTheirMeshesAndOrientations) {
   EXPECT_NE(parse_error(fem + tool + "}\n").find("instrument needs solver: dynamic"), std::string::npos) << parse_error(fem + tool + "}\n");
 }
 
+TEST(Scenario, ContactSectionForTheExplicitFem) {
+  const std::string fem = "ctsurg_scenario: 1\nmodel: {kind: fem, tetmesh: t.h5, solver: dynamic}\nmaterial: {preset: kidney}\n"
+                          "time: {duration_s: 1}\noutput: {trajectory: o.h5}\n";
+  const auto s = parse_scenario(fem + "contact:\n  self: false\n  distance_mm: 0.2\n  bodies:\n    labels: true\n"
+                                      "    gap_mm: 3\n    planes:\n      - {point_mm: [1, 2, 3], normal: [0, 0, 1]}\n",
+                                "f.yaml", "/b");
+  EXPECT_TRUE(s.contact.enabled);
+  EXPECT_FALSE(s.contact.self);
+  EXPECT_EQ(s.contact.distance_mm, 0.2);
+  EXPECT_TRUE(s.contact.split_labels);
+  EXPECT_EQ(s.contact.gap_mm, 3);
+  ASSERT_EQ(s.contact.split_planes.size(), 1u);
+  EXPECT_EQ(s.contact.split_planes[0].point, (std::array<double, 3>{1, 2, 3}));
+  EXPECT_NE(parse_error(replaced(fem, "solver: dynamic", "solver: static") + "contact: {self: true}\n").find("contact: only for kind: fem with solver: dynamic"),
+            std::string::npos);
+  EXPECT_NE(parse_error(fem + "contact:\n  bodies:\n    planes: [{point_mm: [0, 0, 0], normal: [0, 0, 0]}]\n").find("normal: must not be zero"),
+            std::string::npos);
+  EXPECT_NE(parse_error(fem + "contact: {distance_mm: -1}\n").find("contact.distance_mm"), std::string::npos);
+  EXPECT_NE(parse_error(fem + "contact: {friction: 0.3}\n").find("unknown key"), std::string::npos);
+}
+
 TEST(Scenario, SolverSectionAxesAndTheNewFemModels) {
   const std::string base =
       "ctsurg_scenario: 1\nmodel:\n  kind: fem\n  tetmesh: t.h5\n  material_law: corotational\n  solver: implicit\n"

@@ -30,6 +30,7 @@
 #include "ctsurg/sim/fem/fem_model.h"
 
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 namespace ctsurg::sim {
@@ -43,11 +44,18 @@ class FemTetSeparation {
  public:
   // The mesh's interior faces (tets #T x 4). InputError("fem cut", "elements", ...) for a quadratic model.
   explicit FemTetSeparation(const FemModel& model);
+  // The same from bare linear tets (#T x 4 ids below node_count).
+  FemTetSeparation(const std::vector<int32_t>& tets, int32_t node_count);
 
   // Separates the elements across `blade` (positions: the current nodes #N x 3 mm, N = node_count) and
   // splits their nodes: `tets` (#T x 4, the current ids) is updated in place; the new nodes are
   // node_count, node_count + 1, ... in the result's order.
   FemCutResult cut(std::vector<int32_t>& tets, int32_t node_count, const std::vector<double>& positions, const Triangle& blade);
+
+  // Separates the interior faces between elements a and b (original ids, a < b) for which
+  // separate(a, b) holds, and splits their nodes as cut() does: bodies made before a run (the labels
+  // of a multi-organ mesh, a plane between two regions: fem/fem_contact.h).
+  FemCutResult separate_where(std::vector<int32_t>& tets, int32_t node_count, const std::function<bool(int32_t a, int32_t b)>& separate);
 
   int64_t faces_separated() const;   // in all cuts so far
   int64_t interior_faces() const { return static_cast<int64_t>(faces_.size()); }
@@ -57,6 +65,8 @@ class FemTetSeparation {
     int32_t a, b;         // its two elements, a < b
     int32_t nodes[3];     // original node ids
   };
+  void split(std::vector<int32_t>& tets, int32_t node_count, std::vector<int32_t>& touched, FemCutResult& r);
+
   std::vector<Face> faces_;
   std::vector<uint8_t> separated_;
   std::vector<int32_t> original_;        // per current node: the original node it descends from

@@ -60,6 +60,8 @@ struct FemEngineOptions : EngineOptions {
   // The static solver's Newton solves (fem_static_solver.h: the linear solve, tolerances, limits);
   // threads and initial_displacements are the engine's.
   FemStaticOptions newton;
+  // Contact between the model's bodies and self-contact (fem_contact.h): solver dynamic, cpu.
+  FemContactOptions contact;
 };
 
 class FemEngine final : public SimulationEngine {

@@ -35,6 +35,7 @@
 #include "ctsurg/sim/base/backend.h"
 #include "ctsurg/sim/base/instrument.h"
 #include "ctsurg/sim/base/real.h"
+#include "ctsurg/sim/fem/fem_contact.h"
 #include "ctsurg/sim/fem/fem_model.h"
 
 #include <array>
@@ -67,6 +68,7 @@ struct FemDynamicsOptions {
   double energy_growth = 100;             // largest ratio of kinetic energies between checks
   double energy_floor = 1e-6;             // nJ; growth from below this is not counted
   int threads = 0;                        // 0 = one per 8,192 elements up to OpenMP's default
+  FemContactOptions contact;              // bodies and self-contact after each step (fem_contact.h; cpu)
 };
 
 class FemExplicitDynamics {
@@ -101,7 +103,8 @@ class FemExplicitDynamics {
   double time() const { return time_; }            // s
   double dt() const { return dt_; }                // s
   int64_t steps_taken() const { return steps_; }
-  int64_t contacts() const { return contacts_; }   // nodes moved by the sphere and instruments in the last step
+  int64_t contacts() const { return contacts_; }   // nodes moved by the sphere and instruments, and contact pairs, in the last step
+  const FemContact* contact() const { return contact_.get(); }  // null unless options.contact.enabled
   std::vector<double> displacements() const;       // #N x 3 mm
   std::vector<double> positions() const;           // #N x 3 LPS mm, rest + u
   std::vector<Real> raw_displacements() const;     // #N x 3 mm, Real (the step's own values)
@@ -133,6 +136,7 @@ class FemExplicitDynamics {
   std::vector<Real> prescribed_;
   std::array<double, 4> sphere_{0, 0, 0, 0};
   std::vector<InstrumentView> instruments_;
+  std::unique_ptr<FemContact> contact_;  // when options.contact.enabled
   std::unique_ptr<FemDeviceDynamics> device_;  // cuda: the state on the device; null for cpu
 };
 

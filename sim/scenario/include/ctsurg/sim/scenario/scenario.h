@@ -94,6 +94,17 @@ struct SolverSpec {
   int max_cg_iterations = 0;       // iterative: 0 = twice the unknowns
 };
 
+// Contact between bodies and self-contact of an FEM model (fem/fem_contact.h), from the scenario's
+// `contact:` section (kind: fem, solver: dynamic).
+struct ContactSpec {
+  bool enabled = false;
+  bool self = true;                  // within one body too (folds, the lips of a cut)
+  double distance_mm = 0;            // the search for the way out; 0: the mean boundary edge
+  bool split_labels = false;         // the mesh's labels become bodies (several organs in one mesh)
+  std::vector<HalfSpace> split_planes;  // LPS mm: each plane splits the mesh into the bodies either side
+  double gap_mm = 0;                 // a slab this thick around each plane taken out: the bodies start apart
+};
+
 // Bounds of the time section (scenario.cpp): simulated time, the smallest step, output frames.
 inline constexpr double kMaxDurationS = 86400;
 inline constexpr double kMinStepS = 1e-9;
@@ -128,6 +139,7 @@ struct Scenario {
   std::filesystem::path trajectory; // output trajectory (.h5)
   std::vector<RenderRequest> render;  // pictures for the pipeline to make (none: no rendering)
   SolverSpec solver;                // fem static and implicit
+  ContactSpec contact;              // fem dynamic
   std::string backend = "cpu";      // cpu | cuda | auto
   int threads = 0;                  // 0 = automatic
 };
