@@ -137,6 +137,13 @@ void validate_trajectory(const Trajectory& t, const std::string& file) {
     throw InputError(file, "/trajectory/tools/spheres", "expected (F, S, 4) with S = the number of sphere kinds");
   }
   if (t.blades.size() % (nf * 7) != 0) throw InputError(file, "/trajectory/tools/blades", "expected (F, B, 7)");
+  if (t.stitches.size() % (nf * 7) != 0) throw InputError(file, "/trajectory/tools/stitches", "expected (F, K, 7)");
+  require_finite(t.stitches, 7, file, "/trajectory/tools/stitches");
+  for (size_t r = 0; r < t.stitches.size(); r += 7) {
+    if (t.stitches[r + 6] != 0.0 && t.stitches[r + 6] != 1.0) {
+      throw InputError(file, "/trajectory/tools/stitches", "row " + std::to_string(r / 7) + ": placed must be 0 or 1");
+    }
+  }
   for (size_t k = 0; k < t.instruments.size(); ++k) {
     const TrajectoryInstrument& ins = t.instruments[k];
     const std::string where = "/trajectory/tools/instruments/" + std::to_string(k);
@@ -229,6 +236,9 @@ void write_trajectory_file(const std::filesystem::path& path, const Trajectory& 
           }
           tools.write_dataset("instrument_poses", t.instrument_poses, std::array<uint64_t, 3>{nf, t.instruments.size(), 8});
         }
+        if (!t.stitches.empty()) {
+          tools.write_dataset("stitches", t.stitches, std::array<uint64_t, 3>{nf, static_cast<uint64_t>(t.stitch_count()), 7});
+        }
         if (np > 0) {
           h5::Group p = g.create_group("particles");
           const std::array<uint64_t, 2> p3{np, 3};
@@ -307,6 +317,10 @@ Trajectory read_trajectory_file(const std::filesystem::path& path) {
     }
     t.instrument_poses = tools.read_dataset<double>("instrument_poses", &shape);
     expect(tools, "instrument_poses", {nf, static_cast<int64_t>(t.instruments.size()), 8});
+  }
+  if (tools.has("stitches")) {  // optional: files from before sutures have none
+    t.stitches = tools.read_dataset<double>("stitches", &shape);
+    expect(tools, "stitches", {nf, -1, 7});
   }
   if (g.has("particles")) {
     const h5::Group p = g.open_group("particles");

@@ -442,7 +442,8 @@ void SurfaceRenderer::draw(const SceneFrame& frame, const Camera& camera, const 
   glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, ib->second.buffer);
   glDrawElements(GL_TRIANGLES, ib->second.count, GL_UNSIGNED_INT, nullptr);
 
-  if (style.tools && (!frame.spheres.empty() || !frame.blades.empty() || !frame.instrument_triangles.empty())) {
+  if (style.tools && (!frame.spheres.empty() || !frame.blades.empty() || !frame.instrument_triangles.empty() ||
+                      !frame.stitch_triangles.empty())) {
     // Translucent tools over the opaque surface: blended, depth-tested, not writing depth.
     const GLuint q = s.tool_program;
     glUseProgram(q);
@@ -513,6 +514,19 @@ void SurfaceRenderer::draw(const SceneFrame& frame, const Camera& camera, const 
       glUniform1f(glGetUniformLocation(q, "u_scale"), 1.0f);
       glDrawArrays(GL_TRIANGLES, 0, static_cast<GLsizei>(frame.instrument_triangles.size() / 6));
       glDisable(GL_CULL_FACE);
+    }
+    if (!frame.stitch_triangles.empty()) {
+      // Stitches: opaque violet (the colour of dyed absorbable sutures, seen against red tissue).
+      glBindVertexArray(s.blade_vao);
+      glBindBuffer(GL_ARRAY_BUFFER, s.blade_vbo);
+      glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(frame.stitch_triangles.size() * sizeof(float)),
+                   frame.stitch_triangles.data(), GL_STREAM_DRAW);
+      const float violet[4] = {0.42f, 0.2f, 0.75f, 1.0f};
+      const float zero[3] = {0.0f, 0.0f, 0.0f};
+      glUniform4fv(glGetUniformLocation(q, "u_colour"), 1, violet);
+      glUniform3fv(glGetUniformLocation(q, "u_centre"), 1, zero);
+      glUniform1f(glGetUniformLocation(q, "u_scale"), 1.0f);
+      glDrawArrays(GL_TRIANGLES, 0, static_cast<GLsizei>(frame.stitch_triangles.size() / 6));
     }
     glDepthMask(GL_TRUE);
     glDisable(GL_BLEND);

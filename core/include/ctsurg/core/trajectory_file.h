@@ -18,6 +18,9 @@
 //   /trajectory/tools/instruments/<k>/triangles  (T_k, 3) uint32  (attribute name: the mesh file)
 //   /trajectory/tools/instrument_poses     (F, I, 8)  float64  active 1/0, rotation w x y z (unit), translation
 //                                          LPS mm: a vertex q of instrument k is at R q + t (optional: I = 0)
+//   /trajectory/tools/stitches             (F, K, 7)  float64  a suture's stitch: end a xyz, end b xyz (LPS mm, the
+//                                          points it joins, moving with the tissue), placed 1/0 (optional: K = 0;
+//                                          files without it read as K = 0)
 //   /trajectory/particles/rest_positions   (P, 3)     float32  optional: the model's nodes at rest
 //   /trajectory/particles/positions        (F, P, 3)  float32  optional: the nodes at each frame
 //
@@ -65,6 +68,7 @@ struct Trajectory {
   std::vector<double> blades;                      // F x B x 7
   std::vector<TrajectoryInstrument> instruments;   // I
   std::vector<double> instrument_poses;            // F x I x 8: active, w x y z, t (LPS mm)
+  std::vector<double> stitches;                    // F x K x 7: end a, end b (LPS mm), placed 1/0; or empty
   std::vector<float> rest_particles;               // P x 3 or empty
   std::vector<float> particles;                    // F x P x 3 or empty
 
@@ -72,6 +76,7 @@ struct Trajectory {
   int64_t vertex_count() const { return static_cast<int64_t>(rest_vertices.size() / 3); }
   int64_t sphere_count() const { return static_cast<int64_t>(sphere_kinds.size()); }
   int64_t blade_count() const { return frame_count() ? static_cast<int64_t>(blades.size()) / (7 * frame_count()) : 0; }
+  int64_t stitch_count() const { return frame_count() ? static_cast<int64_t>(stitches.size()) / (7 * frame_count()) : 0; }
   int64_t particle_count() const { return static_cast<int64_t>(rest_particles.size() / 3); }
   // The metric called `name`, or nullptr.
   const TrajectoryMetric* metric(const std::string& name) const;

@@ -21,6 +21,10 @@ struct ToolBlade {
   float a[3], b[3];  // the cutting edge's ends, LPS mm
 };
 
+// A stitch is drawn as an 8-sided cylinder of this radius (mm): a 3-0 suture is 0.2-0.25 mm across,
+// drawn thicker to be seen at an organ's scale.
+inline constexpr float kStitchRadiusMm = 0.35f;
+
 struct SceneFrame {
   const float* vertices = nullptr;                // #V x 3, LPS mm (not owned)
   const std::vector<uint32_t>* triangles = nullptr;  // #T x 3 (not owned)
@@ -29,6 +33,8 @@ struct SceneFrame {
   std::vector<ToolBlade> blades;                  // active blades only
   std::vector<float> instrument_triangles;        // active instruments at their poses: #T x 3 corners x
                                                   //   (position LPS mm, unit face normal), flat shaded
+  std::vector<float> stitch_triangles;            // placed stitches as thin cylinders (kStitchRadiusMm), the
+                                                  //   same layout as instrument_triangles
   std::vector<float> values;                      // #V heat-map values (mm) or empty
 };
 
