@@ -38,13 +38,15 @@ int64_t EmbeddedSurface::cut_triangles(const Triangle& blade, const std::vector<
 
 void EmbeddedSurface::set_close_cuts(bool close) {
   close_cuts_ = close;
-  if (close) own_boundary_ = boundary_edges(cut_);
+  if (!close) return;
+  weld_ = weld_coincident(coupling_.rest_vertices);
+  own_boundary_ = boundary_edges(cut_, weld_);
 }
 
 int64_t EmbeddedSurface::close_cut_holes(const std::vector<float>& vertices) {
   if (!close_cuts_) return 0;
   if (static_cast<int64_t>(vertices.size()) != 3 * vertex_count()) throw InputError("surface", "vertices", "expected #V x 3");
-  const std::vector<uint32_t> fill = fill_cut_holes(cut_, vertices, own_boundary_);
+  const std::vector<uint32_t> fill = fill_cut_holes(cut_, vertices, own_boundary_, weld_);
   triangles_ = cut_;
   triangles_.insert(triangles_.end(), fill.begin(), fill.end());
   return static_cast<int64_t>(fill.size() / 3);

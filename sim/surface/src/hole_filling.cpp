@@ -3,6 +3,7 @@
 #include "ctsurg/core/error.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <map>
@@ -17,13 +18,22 @@ void check_triangles(const std::vector<uint32_t>& triangles) {
   if (triangles.size() % 3 != 0) throw InputError("hole filling", "triangles", "expected #F x 3 vertex ids");
 }
 
-// The half-edges (u -> v, as the triangle runs them) whose undirected edge has one triangle.
-std::vector<Edge> boundary_half_edges(const std::vector<uint32_t>& triangles) {
+// The boundary half-edges (u -> v, as their triangle runs them) in welded ids: the edges of the welded
+// triangles used by one of them. Triangles whose welded corners repeat (a marching-cubes sliver between
+// two vertices at one position) have no area and no edge of their own, and are skipped.
+std::vector<Edge> boundary_half_edges(const std::vector<uint32_t>& triangles, const std::vector<uint32_t>& weld) {
   check_triangles(triangles);
+  const auto id = [&](uint32_t v) {
+    if (weld.empty()) return v;
+    if (v >= weld.size()) throw InputError("hole filling", "triangles", "vertex id " + std::to_string(v) + " out of range");
+    return weld[v];
+  };
   std::map<Edge, std::pair<int, Edge>> uses;  // undirected -> (count, the directed half-edge)
   for (size_t f = 0; f < triangles.size(); f += 3) {
+    const uint32_t c[3] = {id(triangles[f]), id(triangles[f + 1]), id(triangles[f + 2])};
+    if (c[0] == c[1] || c[1] == c[2] || c[2] == c[0]) continue;
     for (size_t e = 0; e < 3; ++e) {
-      const uint32_t u = triangles[f + e], v = triangles[f + (e + 1) % 3];
+      const uint32_t u = c[e], v = c[(e + 1) % 3];
       auto& slot = uses[{std::min(u, v), std::max(u, v)}];
       ++slot.first;
       slot.second = {u, v};
@@ -48,18 +58,30 @@ double triangle_area(const std::vector<float>& v, uint32_t a, uint32_t b, uint32
 
 }  // namespace
 
-std::vector<std::pair<uint32_t, uint32_t>> boundary_edges(const std::vector<uint32_t>& triangles) {
+std::vector<uint32_t> weld_coincident(const std::vector<float>& vertices) {
+  const size_t nv = vertices.size() / 3;
+  std::map<std::array<float, 3>, uint32_t> first;
+  std::vector<uint32_t> weld(nv);
+  for (size_t i = 0; i < nv; ++i) {
+    const std::array<float, 3> p{vertices[3 * i], vertices[3 * i + 1], vertices[3 * i + 2]};
+    weld[i] = first.emplace(p, static_cast<uint32_t>(i)).first->second;
+  }
+  return weld;
+}
+
+std::vector<std::pair<uint32_t, uint32_t>> boundary_edges(const std::vector<uint32_t>& triangles, const std::vector<uint32_t>& weld) {
   std::vector<Edge> out;
-  for (const auto& [u, v] : boundary_half_edges(triangles)) out.push_back({std::min(u, v), std::max(u, v)});
+  for (const auto& [u, v] : boundary_half_edges(triangles, weld)) out.push_back({std::min(u, v), std::max(u, v)});
   std::sort(out.begin(), out.end());
   return out;
 }
 
-std::vector<std::vector<uint32_t>> cut_hole_loops(const std::vector<uint32_t>& triangles, const std::vector<Edge>& own_boundary) {
+std::vector<std::vector<uint32_t>> cut_hole_loops(const std::vector<uint32_t>& triangles, const std::vector<Edge>& own_boundary,
+                                                  const std::vector<uint32_t>& weld) {
   // The filling runs each boundary edge v -> u opposite to its triangle's u -> v.
   std::map<uint32_t, std::vector<uint32_t>> out_edges;  // from -> to, sorted: deterministic walks
   std::map<Edge, bool> used;
-  for (const auto& [u, v] : boundary_half_edges(triangles)) {
+  for (const auto& [u, v] : boundary_half_edges(triangles, weld)) {
     if (std::binary_search(own_boundary.begin(), own_boundary.end(), Edge{std::min(u, v), std::max(u, v)})) continue;
     out_edges[v].push_back(u);
     used[{v, u}] = false;
@@ -151,12 +173,12 @@ std::vector<uint32_t> triangulate_loop(const std::vector<uint32_t>& loop, const 
 }
 
 std::vector<uint32_t> fill_cut_holes(const std::vector<uint32_t>& triangles, const std::vector<float>& vertices,
-                                     const std::vector<Edge>& own_boundary) {
+                                     const std::vector<Edge>& own_boundary, const std::vector<uint32_t>& weld) {
   for (const uint32_t v : triangles) {
     if (3 * size_t(v) + 2 >= vertices.size()) throw InputError("hole filling", "triangles", "vertex id " + std::to_string(v) + " out of range");
   }
   std::vector<uint32_t> out;
-  for (const auto& loop : cut_hole_loops(triangles, own_boundary)) {
+  for (const auto& loop : cut_hole_loops(triangles, own_boundary, weld)) {
     const std::vector<uint32_t> t = triangulate_loop(loop, vertices);
     out.insert(out.end(), t.begin(), t.end());
   }

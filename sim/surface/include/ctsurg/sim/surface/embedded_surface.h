@@ -57,7 +57,8 @@ class EmbeddedSurface {
   SurfaceCoupling coupling_;
   std::vector<uint32_t> cut_;        // #F x 3: the surface's triangles the cuts left
   std::vector<uint32_t> triangles_;  // cut_, then the closing triangles
-  std::vector<std::pair<uint32_t, uint32_t>> own_boundary_;  // hole_filling.h boundary_edges() before any cut
+  std::vector<uint32_t> weld_;       // hole_filling.h weld_coincident() of the rest vertices
+  std::vector<std::pair<uint32_t, uint32_t>> own_boundary_;  // boundary_edges() before any cut (welded ids)
   bool close_cuts_ = false;
 };
 
