@@ -114,6 +114,16 @@ void validate_trajectory(const Trajectory& t, const std::string& file) {
       }
     }
   }
+  if (!t.closing_triangles.empty()) {
+    if (t.closing_triangles.size() != t.topologies.size()) {
+      throw InputError(file, "/trajectory/surface/closing_triangles", "expected one entry per topology (" + std::to_string(t.topologies.size()) + ")");
+    }
+    for (size_t k = 0; k < t.topologies.size(); ++k) {
+      if (t.closing_triangles[k] < 0 || static_cast<uint64_t>(t.closing_triangles[k]) > t.topologies[k].size() / 3) {
+        throw InputError(file, "/trajectory/surface/closing_triangles", "entry " + std::to_string(k) + " is not in [0, the topology's triangles]");
+      }
+    }
+  }
   if (t.topology_of_frame.size() != nf) {
     throw InputError(file, "/trajectory/surface/topology_of_frame", "expected one entry per frame (" + std::to_string(nf) + ")");
   }
@@ -204,6 +214,9 @@ void write_trajectory_file(const std::filesystem::path& path, const Trajectory& 
         s.write_dataset("rest_vertices", t.rest_vertices, v3);
         s.write_dataset("vertices", t.vertices, fv3);
         s.write_dataset("topology_of_frame", t.topology_of_frame, f1);
+        if (!t.closing_triangles.empty()) {
+          s.write_dataset("closing_triangles", t.closing_triangles, std::array<uint64_t, 1>{t.closing_triangles.size()});
+        }
         h5::Group topo = s.create_group("topologies");
         for (size_t k = 0; k < t.topologies.size(); ++k) {
           const std::array<uint64_t, 2> t3{t.topologies[k].size() / 3, 3};
@@ -285,6 +298,10 @@ Trajectory read_trajectory_file(const std::filesystem::path& path) {
   for (int64_t k = 0; topo.has(std::to_string(k)); ++k) {
     t.topologies.push_back(topo.read_dataset<uint32_t>(std::to_string(k), &shape));
     expect(topo, std::to_string(k), {-1, 3});
+  }
+  if (s.has("closing_triangles")) {  // optional: files from before hole filling have none
+    t.closing_triangles = s.read_dataset<int64_t>("closing_triangles", &shape);
+    expect(s, "closing_triangles", {static_cast<int64_t>(t.topologies.size())});
   }
   // The metrics in the order written (/trajectory/metrics@names), each with its units attribute.
   const h5::Group m = g.open_group("metrics");

@@ -63,7 +63,10 @@ void TrajectoryRecorder::record(SimulationEngine& engine, const ToolTimeline& ti
   traj_.time.push_back(t);
   for (size_t i = 0; i < vertices_.size(); ++i) traj_.vertices.push_back(static_cast<float>(vertices_[i] + origin_[i % 3]));
   const std::vector<uint32_t>& triangles = engine.triangles();
-  if (traj_.topologies.empty() || traj_.topologies.back() != triangles) traj_.topologies.push_back(triangles);
+  if (traj_.topologies.empty() || traj_.topologies.back() != triangles) {
+    traj_.topologies.push_back(triangles);
+    closing_.push_back(engine.closing_triangles());
+  }
   traj_.topology_of_frame.push_back(static_cast<int32_t>(traj_.topologies.size() - 1));
   if (write_particles_) {
     engine.positions(positions_);
@@ -137,6 +140,7 @@ void TrajectoryRecorder::truncate(size_t frames) {
   traj_.vertices.resize(frames * static_cast<size_t>(traj_.vertex_count()) * 3);
   traj_.topology_of_frame.resize(frames);
   traj_.topologies.resize(frames ? static_cast<size_t>(traj_.topology_of_frame.back()) + 1 : 0);
+  closing_.resize(traj_.topologies.size());
   traj_.particles.resize(frames * traj_.rest_particles.size());
   for (auto& m : metrics_) m.values.resize(frames);
   traj_.spheres.resize(frames * traj_.sphere_kinds.size() * 4);
@@ -148,6 +152,8 @@ void TrajectoryRecorder::truncate(size_t frames) {
 Trajectory TrajectoryRecorder::finish(double dt) {
   traj_.dt_s = dt;
   traj_.metrics = std::move(metrics_);
+  // Only a run that closed some hole says so (older readers and runs without cuts see no dataset).
+  if (std::any_of(closing_.begin(), closing_.end(), [](int64_t n) { return n > 0; })) traj_.closing_triangles = closing_;
   return std::move(traj_);
 }
 

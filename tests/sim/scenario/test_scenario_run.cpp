@@ -583,6 +583,10 @@ TEST(ScenarioRun, CutThenSutureClosesTheBarAndTheSurfaceStaysClosed) {
   const std::vector<uint32_t>& last = t.frame_triangles(t.frame_count() - 1);
   EXPECT_TRUE(boundary_edges(last).empty());
   EXPECT_GT(last.size(), 0u);
+  // The trajectory says which triangles close the holes (the last ones of each topology after the cut).
+  ASSERT_EQ(t.closing_triangles.size(), t.topologies.size());
+  EXPECT_EQ(t.closing_triangles.front(), 0);
+  EXPECT_GT(t.closing_triangles.back(), 0);
   const double v0 = t.metric("enclosed_volume")->values.front(), v = t.metric("enclosed_volume")->values.back();
   EXPECT_NEAR(v, v0 * 30.0 / 32.0, 0.03 * v0) << "v0 " << v0 << " v " << v;
   // A line rising off the bar: its second stitch is 8.5 mm above the top particles (at most 3 cells, 6 mm).

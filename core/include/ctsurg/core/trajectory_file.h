@@ -10,6 +10,8 @@
 //   /trajectory/surface/vertices           (F, V, 3)  float32  LPS mm
 //   /trajectory/surface/topologies/<k>     (T_k, 3)   uint32   triangles, k = "0", "1", ... in order
 //   /trajectory/surface/topology_of_frame  (F)        int32    the topology each frame uses
+//   /trajectory/surface/closing_triangles  (K)        int64    optional, one per topology: how many of its last
+//                                          triangles close the holes a cut left (drawn as the wound's inside)
 //   /trajectory/metrics/<name>             (F)        float64  attribute units (e.g. kinetic_energy, nJ)
 //   /trajectory/tools/spheres              (F, S, 4)  float64  centre xyz LPS mm, radius mm (0: inactive)
 //                                          attribute kinds: "grab;probe;..." (one per sphere)
@@ -62,6 +64,7 @@ struct Trajectory {
   std::vector<float> vertices;                     // F x V x 3, LPS mm
   std::vector<std::vector<uint32_t>> topologies;   // each T_k x 3
   std::vector<int32_t> topology_of_frame;          // F, index into topologies
+  std::vector<int64_t> closing_triangles;          // one per topology (its last triangles closing cut holes), or empty
   std::vector<TrajectoryMetric> metrics;
   std::vector<std::string> sphere_kinds;           // S: "grab" or "probe"
   std::vector<double> spheres;                     // F x S x 4

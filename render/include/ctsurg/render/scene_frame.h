@@ -29,6 +29,8 @@ struct SceneFrame {
   const float* vertices = nullptr;                // #V x 3, LPS mm (not owned)
   const std::vector<uint32_t>* triangles = nullptr;  // #T x 3 (not owned)
   int topology = 0;                               // id of `triangles` (cache key for frames)
+  int64_t closing_triangles = 0;                  // the last ones of `triangles` close cut holes: drawn as
+                                                  //   the wound's inside
   std::vector<ToolSphere> spheres;                // active spheres only
   std::vector<ToolBlade> blades;                  // active blades only
   std::vector<float> instrument_triangles;        // active instruments at their poses: #T x 3 corners x

@@ -136,6 +136,8 @@ class SimulationEngine {
   // The surface's vertices (#V x 3 mm, local), or the nodes' positions when there is no surface.
   virtual void surface_vertices(std::vector<float>& xyz) = 0;
   virtual const std::vector<uint32_t>& triangles() const = 0;  // the surface now (#F x 3); empty: none
+  // How many of triangles()' last triangles close the holes a cut left (surface/hole_filling.h).
+  virtual int64_t closing_triangles() const { return 0; }
   virtual const std::vector<Real>& surface_rest_vertices() const = 0;  // #V x 3 mm, local; empty: none
   virtual EngineMetrics metrics() const = 0;
   // Whether tool `tool` (an index into the tool list) holds something: a grab its capture, a force

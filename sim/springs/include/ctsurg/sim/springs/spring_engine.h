@@ -90,6 +90,7 @@ class SpringEngine final : public SimulationEngine {
   void positions(std::vector<double>& xyz) const override;
   void surface_vertices(std::vector<float>& xyz) override;
   const std::vector<uint32_t>& triangles() const override { return surface_.triangles(); }
+  int64_t closing_triangles() const override { return surface_.fill_triangle_count(); }
   const std::vector<Real>& surface_rest_vertices() const override { return surface_.rest_vertices(); }
   EngineMetrics metrics() const override;
   bool engaged(size_t tool) const override;
