@@ -114,6 +114,16 @@ void validate_trajectory(const Trajectory& t, const std::string& file) {
       }
     }
   }
+  if (!t.closing_triangles.empty()) {
+    if (t.closing_triangles.size() != t.topologies.size()) {
+      throw InputError(file, "/trajectory/surface/closing_triangles", "expected one entry per topology (" + std::to_string(t.topologies.size()) + ")");
+    }
+    for (size_t k = 0; k < t.topologies.size(); ++k) {
+      if (t.closing_triangles[k] < 0 || static_cast<uint64_t>(t.closing_triangles[k]) > t.topologies[k].size() / 3) {
+        throw InputError(file, "/trajectory/surface/closing_triangles", "entry " + std::to_string(k) + " is not in [0, the topology's triangles]");
+      }
+    }
+  }
   if (t.topology_of_frame.size() != nf) {
     throw InputError(file, "/trajectory/surface/topology_of_frame", "expected one entry per frame (" + std::to_string(nf) + ")");
   }
@@ -137,6 +147,13 @@ void validate_trajectory(const Trajectory& t, const std::string& file) {
     throw InputError(file, "/trajectory/tools/spheres", "expected (F, S, 4) with S = the number of sphere kinds");
   }
   if (t.blades.size() % (nf * 7) != 0) throw InputError(file, "/trajectory/tools/blades", "expected (F, B, 7)");
+  if (t.stitches.size() % (nf * 7) != 0) throw InputError(file, "/trajectory/tools/stitches", "expected (F, K, 7)");
+  require_finite(t.stitches, 7, file, "/trajectory/tools/stitches");
+  for (size_t r = 0; r < t.stitches.size(); r += 7) {
+    if (t.stitches[r + 6] != 0.0 && t.stitches[r + 6] != 1.0) {
+      throw InputError(file, "/trajectory/tools/stitches", "row " + std::to_string(r / 7) + ": placed must be 0 or 1");
+    }
+  }
   for (size_t k = 0; k < t.instruments.size(); ++k) {
     const TrajectoryInstrument& ins = t.instruments[k];
     const std::string where = "/trajectory/tools/instruments/" + std::to_string(k);
@@ -197,6 +214,9 @@ void write_trajectory_file(const std::filesystem::path& path, const Trajectory& 
         s.write_dataset("rest_vertices", t.rest_vertices, v3);
         s.write_dataset("vertices", t.vertices, fv3);
         s.write_dataset("topology_of_frame", t.topology_of_frame, f1);
+        if (!t.closing_triangles.empty()) {
+          s.write_dataset("closing_triangles", t.closing_triangles, std::array<uint64_t, 1>{t.closing_triangles.size()});
+        }
         h5::Group topo = s.create_group("topologies");
         for (size_t k = 0; k < t.topologies.size(); ++k) {
           const std::array<uint64_t, 2> t3{t.topologies[k].size() / 3, 3};
@@ -228,6 +248,9 @@ void write_trajectory_file(const std::filesystem::path& path, const Trajectory& 
             one.write_dataset("triangles", ins.triangles, std::array<uint64_t, 2>{ins.triangles.size() / 3, 3});
           }
           tools.write_dataset("instrument_poses", t.instrument_poses, std::array<uint64_t, 3>{nf, t.instruments.size(), 8});
+        }
+        if (!t.stitches.empty()) {
+          tools.write_dataset("stitches", t.stitches, std::array<uint64_t, 3>{nf, static_cast<uint64_t>(t.stitch_count()), 7});
         }
         if (np > 0) {
           h5::Group p = g.create_group("particles");
@@ -276,6 +299,10 @@ Trajectory read_trajectory_file(const std::filesystem::path& path) {
     t.topologies.push_back(topo.read_dataset<uint32_t>(std::to_string(k), &shape));
     expect(topo, std::to_string(k), {-1, 3});
   }
+  if (s.has("closing_triangles")) {  // optional: files from before hole filling have none
+    t.closing_triangles = s.read_dataset<int64_t>("closing_triangles", &shape);
+    expect(s, "closing_triangles", {static_cast<int64_t>(t.topologies.size())});
+  }
   // The metrics in the order written (/trajectory/metrics@names), each with its units attribute.
   const h5::Group m = g.open_group("metrics");
   for (const auto& name : split(m.string_attribute("names"), ';')) {
@@ -307,6 +334,10 @@ Trajectory read_trajectory_file(const std::filesystem::path& path) {
     }
     t.instrument_poses = tools.read_dataset<double>("instrument_poses", &shape);
     expect(tools, "instrument_poses", {nf, static_cast<int64_t>(t.instruments.size()), 8});
+  }
+  if (tools.has("stitches")) {  // optional: files from before sutures have none
+    t.stitches = tools.read_dataset<double>("stitches", &shape);
+    expect(tools, "stitches", {nf, -1, 7});
   }
   if (g.has("particles")) {
     const h5::Group p = g.open_group("particles");

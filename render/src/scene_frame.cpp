@@ -21,6 +21,7 @@ SceneFrame trajectory_scene_frame(const Trajectory& trajectory, int64_t f) {
   s.vertices = trajectory.frame_vertices(f);
   s.triangles = &trajectory.frame_triangles(f);
   s.topology = trajectory.topology_of_frame[static_cast<std::size_t>(f)];
+  if (!trajectory.closing_triangles.empty()) s.closing_triangles = trajectory.closing_triangles[static_cast<std::size_t>(s.topology)];
   const int64_t n_spheres = trajectory.sphere_count();
   for (int64_t i = 0; i < n_spheres && !trajectory.spheres.empty(); ++i) {
     const double* q = trajectory.spheres.data() + 4 * (f * n_spheres + i);
@@ -34,6 +35,25 @@ SceneFrame trajectory_scene_frame(const Trajectory& trajectory, int64_t f) {
     const double* q = trajectory.blades.data() + 7 * (f * n_blades + i);
     if (q[6] == 0.0) continue;
     s.blades.push_back({{float(q[0]), float(q[1]), float(q[2])}, {float(q[3]), float(q[4]), float(q[5])}});
+  }
+  const int64_t n_stitches = trajectory.stitch_count();
+  for (int64_t i = 0; i < n_stitches; ++i) {
+    const double* q = trajectory.stitches.data() + 7 * (f * n_stitches + i);
+    if (q[6] == 0.0) continue;
+    const Eigen::Vector3d a(q[0], q[1], q[2]), b(q[3], q[4], q[5]);
+    if (!((b - a).norm() > 1e-6)) continue;
+    const Eigen::Vector3d axis = (b - a).normalized(), u = axis.unitOrthogonal(), v = axis.cross(u);
+    constexpr int kSides = 8;
+    for (int k = 0; k < kSides; ++k) {
+      const double p0 = 2 * M_PI * k / kSides, p1 = 2 * M_PI * (k + 1) / kSides, pm = 0.5 * (p0 + p1);
+      const Eigen::Vector3d r0 = kStitchRadiusMm * (std::cos(p0) * u + std::sin(p0) * v);
+      const Eigen::Vector3d r1 = kStitchRadiusMm * (std::cos(p1) * u + std::sin(p1) * v);
+      const Eigen::Vector3d n = std::cos(pm) * u + std::sin(pm) * v;
+      for (const Eigen::Vector3d& c : {Eigen::Vector3d(a + r0), Eigen::Vector3d(b + r0), Eigen::Vector3d(b + r1),
+                                       Eigen::Vector3d(a + r0), Eigen::Vector3d(b + r1), Eigen::Vector3d(a + r1)}) {
+        s.stitch_triangles.insert(s.stitch_triangles.end(), {float(c.x()), float(c.y()), float(c.z()), float(n.x()), float(n.y()), float(n.z())});
+      }
+    }
   }
   const size_t n_instruments = trajectory.instruments.size();
   for (size_t k = 0; k < n_instruments; ++k) {

@@ -6,8 +6,10 @@
 
 #include <Eigen/Geometry>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdint>
 #include <map>
 #include <string>
 #include <unordered_set>
@@ -62,10 +64,11 @@ uniform vec3 u_forward;
 uniform vec3 u_key;   // unit, towards the key light (LPS)
 uniform vec3 u_fill;  // unit, towards the fill light
 uniform vec3 u_tissue;
+uniform bool u_wound;  // triangles closing a cut's hole: the incision's inside, not skin
 out vec4 o_colour;
 void main() {
   vec3 n = normalize(v_normal);
-  if (u_use_normal_map) {
+  if (u_use_normal_map && !u_wound) {
     // glTF: bitangent = w * cross(normal, tangent), green up the image.
     vec3 t = v_tangent.xyz - n * dot(n, v_tangent.xyz);
     float tl = length(t);
@@ -79,9 +82,9 @@ void main() {
   vec3 albedo = u_tissue;
   if (u_heat) albedo = texture(u_colour_table, clamp(v_value / u_heat_max, 0.0, 1.0) * (255.0 / 256.0) + 0.5 / 256.0).rgb;
   float specular_strength = u_heat ? 0.12 : 0.28;
-  if (!gl_FrontFacing) {
-    // The inside, seen through a cut: light the face towards the viewer, in a darker red.
-    n = -n;
+  if (!gl_FrontFacing) n = -n;  // light the face towards the viewer
+  if (!gl_FrontFacing || u_wound) {
+    // The inside, seen through a cut or closing one: a darker red.
     albedo = u_heat ? albedo * 0.7 : vec3(0.42, 0.06, 0.08);
     specular_strength = 0.1;
   }
@@ -440,9 +443,18 @@ void SurfaceRenderer::draw(const SceneFrame& frame, const Camera& camera, const 
   glUniformMatrix4fv(glGetUniformLocation(p, "u_view_projection"), 1, GL_FALSE, vp.data());
   glBindVertexArray(s.surface_vao);
   glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, ib->second.buffer);
-  glDrawElements(GL_TRIANGLES, ib->second.count, GL_UNSIGNED_INT, nullptr);
+  // The triangles closing cut holes come last: the rest as tissue, then those as the wound's inside.
+  const GLsizei closing = static_cast<GLsizei>(std::clamp<int64_t>(3 * frame.closing_triangles, 0, ib->second.count));
+  glUniform1i(glGetUniformLocation(p, "u_wound"), 0);
+  glDrawElements(GL_TRIANGLES, ib->second.count - closing, GL_UNSIGNED_INT, nullptr);
+  if (closing > 0) {
+    glUniform1i(glGetUniformLocation(p, "u_wound"), 1);
+    glDrawElements(GL_TRIANGLES, closing, GL_UNSIGNED_INT,
+                   reinterpret_cast<const void*>(static_cast<std::uintptr_t>(ib->second.count - closing) * sizeof(uint32_t)));
+  }
 
-  if (style.tools && (!frame.spheres.empty() || !frame.blades.empty() || !frame.instrument_triangles.empty())) {
+  if (style.tools && (!frame.spheres.empty() || !frame.blades.empty() || !frame.instrument_triangles.empty() ||
+                      !frame.stitch_triangles.empty())) {
     // Translucent tools over the opaque surface: blended, depth-tested, not writing depth.
     const GLuint q = s.tool_program;
     glUseProgram(q);
@@ -513,6 +525,19 @@ void SurfaceRenderer::draw(const SceneFrame& frame, const Camera& camera, const 
       glUniform1f(glGetUniformLocation(q, "u_scale"), 1.0f);
       glDrawArrays(GL_TRIANGLES, 0, static_cast<GLsizei>(frame.instrument_triangles.size() / 6));
       glDisable(GL_CULL_FACE);
+    }
+    if (!frame.stitch_triangles.empty()) {
+      // Stitches: opaque violet (the colour of dyed absorbable sutures, seen against red tissue).
+      glBindVertexArray(s.blade_vao);
+      glBindBuffer(GL_ARRAY_BUFFER, s.blade_vbo);
+      glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(frame.stitch_triangles.size() * sizeof(float)),
+                   frame.stitch_triangles.data(), GL_STREAM_DRAW);
+      const float violet[4] = {0.42f, 0.2f, 0.75f, 1.0f};
+      const float zero[3] = {0.0f, 0.0f, 0.0f};
+      glUniform4fv(glGetUniformLocation(q, "u_colour"), 1, violet);
+      glUniform3fv(glGetUniformLocation(q, "u_centre"), 1, zero);
+      glUniform1f(glGetUniformLocation(q, "u_scale"), 1.0f);
+      glDrawArrays(GL_TRIANGLES, 0, static_cast<GLsizei>(frame.stitch_triangles.size() / 6));
     }
     glDepthMask(GL_TRUE);
     glDisable(GL_BLEND);

@@ -173,3 +173,54 @@ TEST(TrajectoryFile, NonFiniteValuesAreRefused) {
     EXPECT_FALSE(fs::exists(dir / "t.h5"));
   }
 }
+
+// Sutures and closed cuts: the stitches (F, K, 7) and the closing-triangle counts (one per topology)
+// round-trip; a file without them reads as none; wrong shapes and flags are refused.
+TEST(TrajectoryFile, StitchesAndClosingTrianglesRoundTripAndAreChecked) {
+  TempDir dir;
+  auto t = three_frames(false);
+  t.stitches.assign(3 * 2 * 7, 0.0);
+  for (int f = 0; f < 3; ++f) {
+    for (int k = 0; k < 2; ++k) {
+      double* q = &t.stitches[static_cast<size_t>(7 * (2 * f + k))];
+      q[0] = 10 + k;
+      q[3] = 12 + k - 0.5 * f;  // tightening
+      q[2] = q[5] = 650;
+      q[6] = f > 0 ? 1.0 : 0.0;
+    }
+  }
+  t.closing_triangles = {0, 1};
+  ctsurg::write_trajectory_file(dir.path() / "s.h5", t, test_provenance());
+  const auto r = ctsurg::read_trajectory_file(dir.path() / "s.h5");
+  EXPECT_EQ(r.stitch_count(), 2);
+  EXPECT_EQ(r.stitches, t.stitches);
+  EXPECT_EQ(r.closing_triangles, t.closing_triangles);
+  // Without either (as files before sutures): read as none.
+  ctsurg::write_trajectory_file(dir.path() / "old.h5", three_frames(false), test_provenance());
+  const auto old = ctsurg::read_trajectory_file(dir.path() / "old.h5");
+  EXPECT_EQ(old.stitch_count(), 0);
+  EXPECT_TRUE(old.closing_triangles.empty());
+  const auto refused = [&](ctsurg::Trajectory bad, const std::string& field) {
+    try {
+      ctsurg::validate_trajectory(bad, "x.h5");
+      ADD_FAILURE() << "accepted a bad " << field;
+    } catch (const ctsurg::InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(field), std::string::npos) << e.what();
+    }
+  };
+  auto bad = t;
+  bad.stitches.pop_back();
+  refused(bad, "/trajectory/tools/stitches");
+  bad = t;
+  bad.stitches[6] = 0.5;
+  refused(bad, "/trajectory/tools/stitches");
+  bad = t;
+  bad.stitches[0] = std::numeric_limits<double>::quiet_NaN();
+  refused(bad, "/trajectory/tools/stitches");
+  bad = t;
+  bad.closing_triangles = {0};
+  refused(bad, "/trajectory/surface/closing_triangles");
+  bad = t;
+  bad.closing_triangles = {0, 4};  // topology 1 has 3 triangles
+  refused(bad, "/trajectory/surface/closing_triangles");
+}

@@ -8,11 +8,13 @@
 //   CTSURG_UPDATE_GOLDEN=1 build/bin/test_render_pictures
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <fstream>
 
 #include "ctsurg/core/error.h"
 #include "ctsurg/render/render_pictures.h"
+#include "ctsurg/render/scene_frame.h"
 #include "render_test_scenes.h"
 #include "test_support.h"
 
@@ -179,4 +181,54 @@ TEST_F(RenderPictures, MismatchedTrajectoryIsRefused) {
     EXPECT_NE(std::string(e.what()).find("organ.h5"), std::string::npos);
     EXPECT_NE(std::string(e.what()).find("other.h5"), std::string::npos);
   }
+}
+
+// Sutures and closed cuts in the picture of the cut frame: a placed stitch across the slit (in front of
+// the surface) is drawn as a violet cylinder, one not yet placed is not drawn; the triangles the
+// trajectory marks as closing the cut are drawn in the inside's dark red.
+TEST_F(RenderPictures, PlacedStitchesAndClosingTrianglesAreDrawn) {
+  const double y = -ctsurg::test::kSceneRadii[1] - 1.0;
+  ctsurg::Trajectory t = trajectory;
+  t.stitches.assign(3 * 7, 0.0);
+  const double stitch[7] = {-6.0, y, 0.0, 6.0, y, 0.0, 1.0};
+  for (int f = 0; f < 3; ++f) std::copy(stitch, stitch + 7, t.stitches.begin() + 7 * f);
+  t.stitches[7 * 0 + 6] = 0.0;  // frame 0: not placed
+  EXPECT_TRUE(ctsurg::trajectory_scene_frame(t, 0).stitch_triangles.empty());
+  EXPECT_EQ(ctsurg::trajectory_scene_frame(t, 2).stitch_triangles.size(), 8u * 6 * 6);  // 8 sides, 2 triangles, 6 floats a corner
+  const ctsurg::RgbImage without = render_one(surface, &trajectory, 2), with = render_one(surface, &t, 2);
+  int64_t violet = 0, changed = 0;
+  for (int yy = 0; yy < with.height; ++yy)
+    for (int x = 0; x < with.width; ++x) {
+      const uint8_t* a = with.pixel(x, yy);
+      const uint8_t* b = without.pixel(x, yy);
+      if (std::abs(a[0] - b[0]) + std::abs(a[1] - b[1]) + std::abs(a[2] - b[2]) <= 12) continue;
+      ++changed;
+      // Violet, lit or shaded, blended or not at the cylinder's rim: blue over 0.6 of red (the tissue's
+      // is about 0.5, the slit's inside 0.2).
+      violet += 10 * a[2] > 6 * a[0] && a[2] > a[1];
+    }
+  EXPECT_GT(violet, 10);
+  EXPECT_GE(violet, changed * 9 / 10) << changed << " pixels changed, " << violet << " violet";
+  // Move the rest topology's triangles facing the camera near the middle to its end and mark them as
+  // closing a cut: frame 0 then shows them dark red.
+  ctsurg::Trajectory c = trajectory;
+  std::vector<uint32_t> front, rest;
+  const std::vector<uint32_t>& tri = c.topologies[0];
+  for (size_t f = 0; f < tri.size(); f += 3) {
+    double m[3] = {0, 0, 0};
+    for (int k = 0; k < 3; ++k)
+      for (int q = 0; q < 3; ++q) m[q] += surface.vertices[3 * tri[f + static_cast<size_t>(k)] + static_cast<size_t>(q)] / 3.0;
+    const bool middle = m[1] < 0 && std::abs(m[0]) < 6 && std::abs(m[2]) < 6;
+    (middle ? front : rest).insert((middle ? front : rest).end(), tri.begin() + static_cast<long>(f), tri.begin() + static_cast<long>(f) + 3);
+  }
+  ASSERT_GT(front.size(), 0u);
+  rest.insert(rest.end(), front.begin(), front.end());
+  c.topologies[0] = rest;
+  c.closing_triangles = {static_cast<int64_t>(front.size() / 3), 0};
+  EXPECT_EQ(ctsurg::trajectory_scene_frame(c, 0).closing_triangles, static_cast<int64_t>(front.size() / 3));
+  const ctsurg::RgbImage plain = render_one(surface, &trajectory, 0), marked = render_one(surface, &c, 0);
+  int64_t darker = 0;
+  for (int yy = 0; yy < plain.height; ++yy)
+    for (int x = 0; x < plain.width; ++x) darker += marked.pixel(x, yy)[1] + 20 < plain.pixel(x, yy)[1];
+  EXPECT_GT(darker, 0);
 }

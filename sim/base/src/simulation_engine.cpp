@@ -9,6 +9,7 @@ const char* to_string(ToolKind kind) {
     case ToolKind::cut: return "cut";
     case ToolKind::force: return "force";
     case ToolKind::instrument: return "instrument";
+    case ToolKind::suture: return "suture";
   }
   return "?";
 }

@@ -3,6 +3,7 @@
 #include "ctsurg/core/error.h"
 #include "ctsurg/core/input_file.h"
 #include "ctsurg/sim/scenario/scenario_model.h"
+#include "ctsurg/sim/springs/suture.h"
 #include "yaml_field.h"
 
 #include <nlohmann/json.hpp>
@@ -64,20 +65,82 @@ std::optional<Quaternion> rotation_of(const YamlField& key) {
   return std::nullopt;
 }
 
+double distance(const std::array<double, 3>& a, const std::array<double, 3>& b) {
+  return std::sqrt(std::pow(b[0] - a[0], 2) + std::pow(b[1] - a[1], 2) + std::pow(b[2] - a[2], 2));
+}
+
+// suture: {start_s, end_s, stitches: [{a, b}], along: {from, to, count, width_mm, across}, target_length_mm,
+// stiffness_ratio}: the window is required (the knots tighten over it), no path.
+ToolAction suture_of(const YamlField& f, const std::string& label) {
+  f.only({"start_s", "end_s", "stitches", "along", "target_length_mm", "stiffness_ratio"});
+  ToolAction t;
+  t.kind = ToolKind::suture;
+  t.label = label;
+  t.start_s = f.child("start_s").non_negative();
+  t.end_s = f.child("end_s").positive();
+  if (!(t.end_s > t.start_s)) f.child("end_s").fail("must be after start_s (the knots tighten from start_s to end_s)");
+  if (f.has("target_length_mm")) {
+    t.stitch_target_mm = f.child("target_length_mm").non_negative();
+    if (t.stitch_target_mm > kMaxStitchLengthMm) f.child("target_length_mm").fail("must be at most " + YamlField::num(kMaxStitchLengthMm) + " mm");
+  }
+  if (f.has("stiffness_ratio")) {
+    t.stitch_stiffness_ratio = f.child("stiffness_ratio").positive();
+    if (t.stitch_stiffness_ratio > 1000) f.child("stiffness_ratio").fail("must be at most 1000 (x the stiffest spring)");
+  }
+  if (f.has("stitches")) {
+    const auto items = f.child("stitches").items();
+    for (size_t k = 0; k < items.size(); ++k) {
+      items[k].only({"a", "b"});
+      StitchSpec st{items[k].child("a").vec3(), items[k].child("b").vec3(), items[k].path()};
+      const double len = distance(st.a, st.b);
+      if (!(len > 1e-6)) items[k].child("b").fail("is the same point as a (a stitch joins two points)");
+      if (len > kMaxStitchLengthMm) {
+        items[k].child("b").fail("is " + YamlField::num(len) + " mm from a (at most " + YamlField::num(kMaxStitchLengthMm) + " mm)");
+      }
+      t.stitches.push_back(st);
+    }
+  }
+  if (f.has("along")) {
+    const YamlField a = f.child("along");
+    a.only({"from", "to", "count", "width_mm", "across"});
+    SutureLine line;
+    line.from = a.child("from").vec3();
+    line.to = a.child("to").vec3();
+    line.count = static_cast<int>(a.child("count").integer(1, 1000));
+    line.width_mm = a.child("width_mm").positive();
+    line.field = a.path();
+    if (line.width_mm > kMaxStitchLengthMm) a.child("width_mm").fail("must be at most " + YamlField::num(kMaxStitchLengthMm) + " mm");
+    const double len = distance(line.from, line.to);
+    if (!(len > 1e-6)) a.child("to").fail("is the same point as from (the line needs a direction)");
+    if (a.has("across")) {
+      const std::array<double, 3> c = a.child("across").vec3();
+      const std::array<double, 3> d{(line.to[0] - line.from[0]) / len, (line.to[1] - line.from[1]) / len, (line.to[2] - line.from[2]) / len};
+      const double n = std::sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
+      const double along = std::abs(c[0] * d[0] + c[1] * d[1] + c[2] * d[2]);
+      if (!(n > 0) || along > 0.99 * n) a.child("across").fail("must not be zero or along the line");
+      line.across = c;
+    }
+    t.along = line;
+  }
+  if (t.stitches.empty() && !t.along) f.fail("give stitches: [{a, b}, ...] and/or along: {from, to, count, width_mm}");
+  return t;
+}
+
 ToolAction tool_of(const YamlField& item, const fs::path& base_dir) {
-  if (!item.is_map()) item.fail("expected one of grab:, probe:, cut:, force:, instrument: with the tool's fields under it");
+  if (!item.is_map()) item.fail("expected one of grab:, probe:, cut:, force:, instrument:, suture: with the tool's fields under it");
   int kinds = 0;
   ToolAction t;
   std::string key;
-  for (const char* k : {"grab", "probe", "cut", "force", "instrument"}) {
+  for (const char* k : {"grab", "probe", "cut", "force", "instrument", "suture"}) {
     if (item.has(k)) {
       ++kinds;
       key = k;
     }
   }
-  item.only({"grab", "probe", "cut", "force", "instrument"});
-  if (kinds != 1) item.fail("each tool is exactly one of grab:, probe:, cut:, force:, instrument:");
+  item.only({"grab", "probe", "cut", "force", "instrument", "suture"});
+  if (kinds != 1) item.fail("each tool is exactly one of grab:, probe:, cut:, force:, instrument:, suture:");
   const YamlField f = item.child(key);
+  if (key == "suture") return suture_of(f, item.path() + " (suture)");
   t.kind = key == "grab"    ? ToolKind::grab
            : key == "probe" ? ToolKind::probe
            : key == "cut"   ? ToolKind::cut
@@ -245,7 +308,8 @@ static Scenario parse_fields(const std::string& text, const fs::path& file, cons
   s.name = top.has("name") ? top.child("name").text() : file.stem().string();
 
   const YamlField m = top.child("model");
-  m.only({"kind", "grid", "surface", "tetmesh", "springs_from", "coupling", "mass_from_fraction", "material_law", "solver", "elements"});
+  m.only({"kind", "grid", "surface", "tetmesh", "springs_from", "coupling", "mass_from_fraction", "material_law", "solver", "elements",
+          "close_cuts"});
   const std::string kind = m.child("kind").one_of({"spring_grid", "explicit_springs", "fem"});
   s.model = kind == "spring_grid" ? ModelKind::spring_grid : kind == "fem" ? ModelKind::fem : ModelKind::explicit_springs;
   if (s.model != ModelKind::fem || m.has("grid")) s.grid = resolve(base_dir, m.child("grid").text());
@@ -284,6 +348,10 @@ static Scenario parse_fields(const std::string& text, const fs::path& file, cons
                      : CouplingMode::nearest_particle;
   }
   if (m.has("mass_from_fraction")) s.mass_from_fraction = m.child("mass_from_fraction").boolean();
+  if (m.has("close_cuts")) {
+    if (s.model == ModelKind::fem) m.child("close_cuts").fail("only for the spring models (a FEM cut's surface is left open)");
+    s.close_cuts = m.child("close_cuts").boolean();
+  }
 
   const YamlField mat = top.child("material");
   mat.only({"preset", "youngs_modulus_pa", "poisson_ratio", "density_g_per_cm3", "damping_per_s", "stiffness_damping_s"});
@@ -320,6 +388,10 @@ static Scenario parse_fields(const std::string& text, const fs::path& file, cons
       s.tools.push_back(tool_of(item, base_dir));
       // FEM tools: grab (prescribed displacements), probe and instrument (contact, dynamic only), cut
       // (elements separated, nodes split: linear tets only, fem/fem_cutting.h).
+      if (s.model == ModelKind::fem && s.tools.back().kind == ToolKind::suture) {
+        item.fail("suture runs on the spring models only (kind: spring_grid or explicit_springs); stitches for kind: fem "
+                  "are not implemented yet");
+      }
       if (s.model == ModelKind::fem && s.fem_order != 1 && s.tools.back().kind == ToolKind::cut) {
         item.fail("cut needs linear (4-node) tets; quadratic elements are not cut (elements: linear)");
       }

@@ -158,9 +158,11 @@ ScenarioEngine spring_engine(const Scenario& s, Backend backend, const std::func
     } else {
       surface = embed_in_tets(local.mesh, *tetmesh, note);
     }
+    surface.set_close_cuts(s.close_cuts);
   }
   if (backend == Backend::cuda) {
     for (const auto& t : s.tools) {
+      if (t.kind == ToolKind::suture) throw InputError(sfile, t.label, "sutures run on the cpu backend only; set backend: cpu");
       if (t.kind == ToolKind::force) throw InputError(sfile, t.label, "force tools run on the cpu backend only; set backend: cpu");
       if (t.kind == ToolKind::instrument) {
         throw InputError(sfile, t.label, "instruments run on the cpu backend only for spring models (the contact kernel is "

@@ -59,7 +59,7 @@ Trajectory run(const Scenario& s, ScenarioEngine built, RunReport& report, const
   const std::string sfile = s.file.string();
   const auto note = [&](const std::string& text) { report.notes.push_back(text); };
   SimulationEngine& engine = *built.engine;
-  ToolTimeline timeline(s.tools, engine.rest_positions(), engine.origin(), note);
+  ToolTimeline timeline(s.tools, engine.rest_positions(), engine.origin(), note, sfile);
   const int64_t frame_count = static_cast<int64_t>(std::floor(s.duration_s / s.frame_interval_s + 1e-9)) + 1;
   TrajectoryRecorder recorder(s, engine, timeline, std::move(built.surface_lps_vertices), frame_count);
   const EngineCounts counts = engine.counts();

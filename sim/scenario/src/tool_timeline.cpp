@@ -2,13 +2,68 @@
 
 #include "rest_bounds.h"
 
+#include "ctsurg/core/error.h"
+
 #include <algorithm>
 #include <cmath>
+#include <string>
 
 namespace ctsurg::sim {
 namespace {
 
 constexpr double kWindowTolerance = 1e-12;  // s: a step landing on start_s in floating point still starts it
+constexpr double kOutwardRadiusMm = 15;     // the neighbourhood whose centroid gives a suture line's outward side
+
+Vec3 local(const std::array<double, 3>& lps, const Vec3& origin) { return {lps[0] - origin[0], lps[1] - origin[1], lps[2] - origin[2]}; }
+
+double norm(const Vec3& v) { return std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]); }
+
+Vec3 cross(const Vec3& a, const Vec3& b) { return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]}; }
+
+// A suture's stitches in the local frame: the listed ones, then the line's (scenario.h, SutureLine).
+void resolve_stitches(const ToolAction& spec, const std::vector<double>& rest, const Vec3& origin, const std::string& where,
+                      std::vector<std::array<Vec3, 2>>& points, std::vector<std::string>& fields) {
+  for (const StitchSpec& st : spec.stitches) {
+    points.push_back({local(st.a, origin), local(st.b, origin)});
+    fields.push_back(st.field);
+  }
+  if (!spec.along) return;
+  const SutureLine& line = *spec.along;
+  const Vec3 from = local(line.from, origin), to = local(line.to, origin);
+  const Vec3 dir{to[0] - from[0], to[1] - from[1], to[2] - from[2]};
+  Vec3 across;
+  if (line.across) {
+    across = *line.across;
+  } else {
+    const Vec3 mid{0.5 * (from[0] + to[0]), 0.5 * (from[1] + to[1]), 0.5 * (from[2] + to[2])};
+    Vec3 centroid{0, 0, 0};
+    double n = 0;
+    for (size_t i = 0; i + 2 < rest.size(); i += 3) {
+      const Vec3 p{rest[i], rest[i + 1], rest[i + 2]};
+      if (norm({p[0] - mid[0], p[1] - mid[1], p[2] - mid[2]}) > kOutwardRadiusMm) continue;
+      for (size_t c = 0; c < 3; ++c) centroid[c] += p[c];
+      n += 1;
+    }
+    if (n == 0) throw InputError(where, line.field, "no tissue within 15 mm of the line's middle: put the line on the tissue");
+    const Vec3 outward{mid[0] - centroid[0] / n, mid[1] - centroid[1] / n, mid[2] - centroid[2] / n};
+    across = cross(dir, outward);
+    if (!(norm(across) > 1e-6 * norm(dir) * std::max(1.0, norm(outward)))) {
+      throw InputError(where, line.field + ".across", "the tissue's outward direction is along the line here: give across: [x, y, z]");
+    }
+  }
+  // Only the part of `across` perpendicular to the line, unit length.
+  const double dd = dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2];
+  const double along = (across[0] * dir[0] + across[1] * dir[1] + across[2] * dir[2]) / dd;
+  Vec3 u{across[0] - along * dir[0], across[1] - along * dir[1], across[2] - along * dir[2]};
+  const double un = norm(u);
+  for (double& c : u) c *= 0.5 * line.width_mm / un;
+  for (int k = 0; k < line.count; ++k) {
+    const double f = (k + 0.5) / line.count;
+    const Vec3 p{from[0] + f * dir[0], from[1] + f * dir[1], from[2] + f * dir[2]};
+    points.push_back({Vec3{p[0] - u[0], p[1] - u[1], p[2] - u[2]}, Vec3{p[0] + u[0], p[1] + u[1], p[2] + u[2]}});
+    fields.push_back(line.field + " (stitch " + std::to_string(k + 1) + " of " + std::to_string(line.count) + ")");
+  }
+}
 
 }  // namespace
 
@@ -29,7 +84,7 @@ Quaternion ToolTimeline::Path::rotation_at(double time) const {
 }
 
 ToolTimeline::ToolTimeline(const std::vector<ToolAction>& tools, const std::vector<double>& rest, const Vec3& origin,
-                           const std::function<void(const std::string&)>& note) {
+                           const std::function<void(const std::string&)>& note, const std::string& where) {
   const RestBounds bounds = bounds_of(rest);
   for (const ToolAction& spec : tools) {
     Tool tool;
@@ -43,6 +98,12 @@ ToolTimeline::ToolTimeline(const std::vector<ToolAction>& tools, const std::vect
       r.t.push_back(k.t);
       r.p.push_back(p);
       r.r.push_back(k.rotation ? *k.rotation : r.r.empty() ? kIdentityRotation : r.r.back());
+    }
+    if (spec.kind == ToolKind::suture) {
+      resolve_stitches(spec, rest, origin, where, tool.stitch_points, tool.stitch_fields);
+      r.t = {spec.start_s};
+      r.p = {tool.stitch_points.front()[0]};
+      r.r = {kIdentityRotation};
     }
     if (spec.kind == ToolKind::instrument) tool.instrument = load_instrument(spec.instrument_mesh, spec.instrument_spacing_mm, note);
     if (spec.snap_to_tissue) {
@@ -99,6 +160,13 @@ void ToolTimeline::inputs(double t0, double t1, double min_sweep_mm, std::vector
     in.sweeps.clear();
     in.instrument = tool.instrument;
     in.orientation = tool.path.rotation_at(t1);
+    in.end_s = spec.end_s;
+    if (spec.kind == ToolKind::suture) {
+      in.stitches = tool.stitch_points;
+      in.stitch_fields = tool.stitch_fields;
+      in.stitch_target_mm = spec.stitch_target_mm;
+      in.stitch_stiffness_ratio = spec.stitch_stiffness_ratio;
+    }
     if (spec.kind == ToolKind::cut) sweeps(tool, t0, t1, min_sweep_mm, in.sweeps);
   }
 }

@@ -43,6 +43,8 @@ TrajectoryRecorder::TrajectoryRecorder(const Scenario& s, const SimulationEngine
   for (size_t i = 0; i < timeline.size(); ++i) {
     if (timeline.tool(i).kind == ToolKind::cut) {
       ++blades_;
+    } else if (timeline.tool(i).kind == ToolKind::suture) {
+      stitches_ += timeline.stitch_points(i).size();
     } else if (timeline.tool(i).kind == ToolKind::instrument) {
       const Instrument& shape = *timeline.instrument(i);
       TrajectoryInstrument ins;
@@ -61,7 +63,10 @@ void TrajectoryRecorder::record(SimulationEngine& engine, const ToolTimeline& ti
   traj_.time.push_back(t);
   for (size_t i = 0; i < vertices_.size(); ++i) traj_.vertices.push_back(static_cast<float>(vertices_[i] + origin_[i % 3]));
   const std::vector<uint32_t>& triangles = engine.triangles();
-  if (traj_.topologies.empty() || traj_.topologies.back() != triangles) traj_.topologies.push_back(triangles);
+  if (traj_.topologies.empty() || traj_.topologies.back() != triangles) {
+    traj_.topologies.push_back(triangles);
+    closing_.push_back(engine.closing_triangles());
+  }
   traj_.topology_of_frame.push_back(static_cast<int32_t>(traj_.topologies.size() - 1));
   if (write_particles_) {
     engine.positions(positions_);
@@ -96,7 +101,7 @@ void TrajectoryRecorder::record(SimulationEngine& engine, const ToolTimeline& ti
   for (size_t k = 0; k < m.extra.size(); ++k) metrics_[std::size(values) + k].values.push_back(m.extra[k]);
   for (size_t i = 0; i < timeline.size(); ++i) {
     const ToolAction& tool = timeline.tool(i);
-    if (tool.kind == ToolKind::cut) continue;
+    if (tool.kind == ToolKind::cut || tool.kind == ToolKind::suture) continue;
     const Vec3 l = timeline.position(i, t), c{l[0] + origin_[0], l[1] + origin_[1], l[2] + origin_[2]};
     if (tool.kind == ToolKind::instrument) {
       const Quaternion q = timeline.orientation(i, t);
@@ -115,6 +120,18 @@ void TrajectoryRecorder::record(SimulationEngine& engine, const ToolTimeline& ti
     traj_.blades.insert(traj_.blades.end(), {c[0] - e[0] / 2, c[1] - e[1] / 2, c[2] - e[2] / 2, c[0] + e[0] / 2,
                                              c[1] + e[1] / 2, c[2] + e[2] / 2, timeline.active(i, t) ? 1.0 : 0.0});
   }
+  // Stitches: where the engine holds them once placed, else where the scenario puts them (not placed).
+  for (size_t i = 0; i < timeline.size(); ++i) {
+    if (timeline.tool(i).kind != ToolKind::suture) continue;
+    const std::vector<std::array<Vec3, 2>> placed = engine.stitches(i);
+    const std::vector<std::array<Vec3, 2>>& given = timeline.stitch_points(i);
+    const bool on = placed.size() == given.size();
+    for (size_t k = 0; k < given.size(); ++k) {
+      const auto& ends = on ? placed[k] : given[k];
+      for (const Vec3& p : ends) traj_.stitches.insert(traj_.stitches.end(), {p[0] + origin_[0], p[1] + origin_[1], p[2] + origin_[2]});
+      traj_.stitches.push_back(on ? 1.0 : 0.0);
+    }
+  }
 }
 
 void TrajectoryRecorder::truncate(size_t frames) {
@@ -123,16 +140,20 @@ void TrajectoryRecorder::truncate(size_t frames) {
   traj_.vertices.resize(frames * static_cast<size_t>(traj_.vertex_count()) * 3);
   traj_.topology_of_frame.resize(frames);
   traj_.topologies.resize(frames ? static_cast<size_t>(traj_.topology_of_frame.back()) + 1 : 0);
+  closing_.resize(traj_.topologies.size());
   traj_.particles.resize(frames * traj_.rest_particles.size());
   for (auto& m : metrics_) m.values.resize(frames);
   traj_.spheres.resize(frames * traj_.sphere_kinds.size() * 4);
   traj_.blades.resize(frames * blades_ * 7);
   traj_.instrument_poses.resize(frames * traj_.instruments.size() * 8);
+  traj_.stitches.resize(frames * stitches_ * 7);
 }
 
 Trajectory TrajectoryRecorder::finish(double dt) {
   traj_.dt_s = dt;
   traj_.metrics = std::move(metrics_);
+  // Only a run that closed some hole says so (older readers and runs without cuts see no dataset).
+  if (std::any_of(closing_.begin(), closing_.end(), [](int64_t n) { return n > 0; })) traj_.closing_triangles = closing_;
   return std::move(traj_);
 }
 

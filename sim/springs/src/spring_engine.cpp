@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <string>
 #include <type_traits>
 #include <utility>
@@ -34,6 +35,13 @@ double shortest_spring(const SpringModel& model) {
     } else {
       return m.rest_length.empty() ? 1.0 : static_cast<double>(*std::min_element(m.rest_length.begin(), m.rest_length.end()));
     }
+  }, model);
+}
+
+double stiffest_spring(const SpringModel& model) {
+  return std::visit([](const auto& m) -> double {
+    if (m.stiffness.empty()) return 0.0;
+    return static_cast<double>(*std::max_element(m.stiffness.begin(), m.stiffness.end()));
   }, model);
 }
 
@@ -79,6 +87,10 @@ SpringEngine::SpringEngine(SpringModel model, ParticleState state, EmbeddedSurfa
       // or its end): a spring cannot slip between two sweeps, and sweeping every step would cost a pass
       // over the model per step.
       blade_sweep_mm_(0.25 * shortest_spring(model_)),
+      shortest_spring_mm_(shortest_spring(model_)),
+      // A stitch as stiff as the stiffest tissue spring: it closes a wound against the tissue without
+      // dominating a particle's spring sum (a grid particle has 18), so the auto step stays stable.
+      stitch_unit_stiffness_(stiffest_spring(model_)),
       params_(step_parameters(options_.dt > 0 ? options_.dt : critical_.dt, options_)),
       guard_(make_guard()) {
   if (static_cast<size_t>(state_.count()) * 3 != rest_real_.size()) {
@@ -226,18 +238,99 @@ void SpringEngine::apply_tools(const std::vector<ToolInput>& tools) {
           tool_work_ = true;
         }
         break;
+      case ToolKind::suture:
+        if (h.stitches.empty() && !h.released && tool.active) place_stitches(tool, h);
+        if (!h.stitches.empty()) {
+          apply_stitches(state_, h.stitches, h.schedule, time_, params_.dt);
+          // While the knots tighten the stitches do work on the tissue; afterwards they are plain springs.
+          tool_work_ |= time_ < h.schedule.end_s;
+        }
+        break;
     }
   }
+}
+
+double SpringEngine::spring_sum(int32_t particle) const {
+  const size_t i = static_cast<size_t>(particle);
+  return std::visit([&](const auto& m) -> double {
+    double k = 0;
+    if constexpr (std::is_same_v<std::decay_t<decltype(m)>, SpringGridModel>) {
+      for (int d = 0; d < kGridDirections; ++d) {
+        if (m.spring_mask[i] & (1u << d)) k += m.stiffness[static_cast<size_t>(d)];
+      }
+    } else {
+      for (int32_t e = m.row_offsets[i]; e < m.row_offsets[i + 1]; ++e) {
+        const size_t sp = static_cast<size_t>(m.row_spring[static_cast<size_t>(e)]);
+        if (m.alive[sp]) k += m.stiffness[sp];
+      }
+    }
+    return k;
+  }, model_);
+}
+
+// Places a suture's stitches on the particles nearest to their points at rest, after checking that the
+// explicit step stays stable with them (suture.h).
+void SpringEngine::place_stitches(const ToolInput& suture, Hold& h) {
+  if (stepper_->on_device()) {
+    throw InputError(options_.where, suture.label, "sutures run on the cpu backend only; set backend: cpu");
+  }
+  stepper_->to_host();
+  std::vector<Stitch> stitches = attach_stitches(suture.stitches, suture.stitch_fields, rest_real_, state_,
+                                                 kStitchSnapCells * shortest_spring_mm_, options_.where);
+  const double k = suture.stitch_stiffness_ratio * stitch_unit_stiffness_;
+  std::vector<double> added(static_cast<size_t>(state_.count()), 0.0);
+  for (const Stitch& st : stitches) {
+    added[static_cast<size_t>(st.a)] += k;
+    added[static_cast<size_t>(st.b)] += k;
+  }
+  for (const Stitch& st : stitches) {
+    for (const int32_t p : {st.a, st.b}) {
+      const size_t i = static_cast<size_t>(p);
+      const double m = state_.inv_mass[i] > 0 ? 1.0 / state_.inv_mass[i] : 0.0;
+      const double limit = stitch_step_limit(m, spring_sum(p), added[i]);
+      if (params_.dt > limit) {
+        // The largest ratio that keeps this particle stable with its n stitch ends: K + n r u = 2 m / dt^2.
+        const double ends = std::round(added[i] / k), spring = spring_sum(p);
+        const double ratio = std::max(0.0, 2 * m / (params_.dt * params_.dt) - spring) / (ends * stitch_unit_stiffness_);
+        char text[400];
+        std::snprintf(text, sizeof text,
+                      "%.4g (stitches of %.4g g/s^2) makes particle %d (mass %.4g g, springs %.4g g/s^2, %.0f stitch ends) "
+                      "unstable: it needs a step <= %.4g s, the run's is %.4g s; lower stiffness_ratio to <= %.3g or "
+                      "set time.dt_s <= %.4g",
+                      suture.stitch_stiffness_ratio, k, p, m, spring, ends, limit, params_.dt, ratio, limit);
+        throw InputError(options_.where, suture.label + ".stiffness_ratio", text);
+      }
+    }
+  }
+  h.stitches = std::move(stitches);
+  h.schedule = {suture.start_s, suture.end_s, suture.stitch_target_mm, k};
+  note(suture.label + ": " + std::to_string(h.stitches.size()) + " stitches placed at t = " + std::to_string(time_) +
+       " s, " + std::to_string(k) + " g/s^2 each");
+}
+
+std::vector<std::array<Vec3, 2>> SpringEngine::stitches(size_t tool) const {
+  std::vector<std::array<Vec3, 2>> out;
+  if (tool >= holds_.size()) return out;
+  for (const Stitch& st : holds_[tool].stitches) {
+    const size_t a = static_cast<size_t>(st.a), b = static_cast<size_t>(st.b);
+    out.push_back({Vec3{state_.x[a] + st.offset_a[0], state_.y[a] + st.offset_a[1], state_.z[a] + st.offset_a[2]},
+                   Vec3{state_.x[b] + st.offset_b[0], state_.y[b] + st.offset_b[1], state_.z[b] + st.offset_b[2]}});
+  }
+  return out;
 }
 
 // Cuts the springs and the surface crossing the quad the blade's edge swept from centre `from` to `to`.
 void SpringEngine::sweep_blade(const ToolInput& blade, const Vec3& from, const Vec3& to) {
   stepper_->to_host();
   if (!surface_.empty()) surface_.move(state_, rest_real_, vertices_, options_.threads);
+  int64_t removed = 0;
   for (const Triangle& tri : swept_blade(from, to, blade.blade_edge_mm)) {
-    if (!surface_.empty()) triangles_removed_ += surface_.cut(tri, vertices_, state_);
+    if (!surface_.empty()) removed += surface_.cut(tri, vertices_, state_);
     springs_cut_ += stepper_->cut(tri);
   }
+  triangles_removed_ += removed;
+  // The holes are closed over the vertices where they are now, before the lips separate.
+  if (removed > 0) surface_.close_cut_holes(vertices_);
 }
 
 void SpringEngine::sync() { stepper_->to_host(); }

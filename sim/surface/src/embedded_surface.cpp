@@ -1,6 +1,7 @@
 #include "ctsurg/sim/surface/embedded_surface.h"
 
 #include "ctsurg/core/error.h"
+#include "ctsurg/sim/surface/hole_filling.h"
 #include "ctsurg/sim/surface/surface_cutting.h"
 
 #include <string>
@@ -9,12 +10,13 @@
 namespace ctsurg::sim {
 
 EmbeddedSurface::EmbeddedSurface(SurfaceCoupling coupling, std::vector<uint32_t> triangles)
-    : coupling_(std::move(coupling)), triangles_(std::move(triangles)) {
-  if (triangles_.size() % 3 != 0) throw InputError("surface", "triangles", "expected #F x 3 vertex ids");
+    : coupling_(std::move(coupling)), cut_(std::move(triangles)) {
+  if (cut_.size() % 3 != 0) throw InputError("surface", "triangles", "expected #F x 3 vertex ids");
   const auto nv = static_cast<uint64_t>(coupling_.vertex_count());
-  for (const uint32_t v : triangles_) {
+  for (const uint32_t v : cut_) {
     if (v >= nv) throw InputError("surface", "triangles", "vertex id " + std::to_string(v) + " out of range (" + std::to_string(nv) + " vertices)");
   }
+  triangles_ = cut_;
 }
 
 void EmbeddedSurface::move(const ParticleState& positions, const std::vector<Real>& rest, std::vector<float>& vertices,
@@ -23,11 +25,31 @@ void EmbeddedSurface::move(const ParticleState& positions, const std::vector<Rea
 }
 
 int64_t EmbeddedSurface::cut(const Triangle& blade, const std::vector<float>& vertices, const ParticleState& positions) {
-  return cut_surface(triangles_, coupling_, vertices, positions, blade).triangles_removed;
+  const int64_t removed = cut_surface(cut_, coupling_, vertices, positions, blade).triangles_removed;
+  if (removed > 0) triangles_ = cut_;  // open until close_cut_holes() re-closes it
+  return removed;
 }
 
 int64_t EmbeddedSurface::cut_triangles(const Triangle& blade, const std::vector<float>& vertices) {
-  return remove_crossed_triangles(triangles_, vertices, blade);
+  const int64_t removed = remove_crossed_triangles(cut_, vertices, blade);
+  if (removed > 0) triangles_ = cut_;  // open until close_cut_holes() re-closes it
+  return removed;
+}
+
+void EmbeddedSurface::set_close_cuts(bool close) {
+  close_cuts_ = close;
+  if (!close) return;
+  weld_ = weld_coincident(coupling_.rest_vertices);
+  own_boundary_ = boundary_edges(cut_, weld_);
+}
+
+int64_t EmbeddedSurface::close_cut_holes(const std::vector<float>& vertices) {
+  if (!close_cuts_) return 0;
+  if (static_cast<int64_t>(vertices.size()) != 3 * vertex_count()) throw InputError("surface", "vertices", "expected #V x 3");
+  const std::vector<uint32_t> fill = fill_cut_holes(cut_, vertices, own_boundary_, weld_);
+  triangles_ = cut_;
+  triangles_.insert(triangles_.end(), fill.begin(), fill.end());
+  return static_cast<int64_t>(fill.size() / 3);
 }
 
 void EmbeddedSurface::retie(std::vector<int32_t> particles) {

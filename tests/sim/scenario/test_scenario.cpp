@@ -342,3 +342,64 @@ TEST(Scenario, YamlShapesTheChecksDidNotForeseeAreInputErrors) {
     }
   }
 }
+
+TEST(Scenario, SutureFieldsAndTheirChecks) {
+  const std::string suture = R"(
+  - suture:
+      start_s: 0.3
+      end_s: 0.5
+      target_length_mm: 1.5
+      stiffness_ratio: 0.5
+      stitches:
+        - {a: [20, -15, 40], b: [22, -15, 40]}
+      along: {from: [21, -18, 40], to: [21, -12, 40], count: 3, width_mm: 4, across: [1, 0, 0]}
+time:)";
+  const std::string text = replaced(kFull, "\ntime:", suture);
+  const auto s = parse_scenario(text, "s.yaml", "/base");
+  ASSERT_EQ(s.tools.size(), 3u);
+  const auto& t = s.tools[2];
+  EXPECT_EQ(t.kind, ctsurg::sim::ToolKind::suture);
+  EXPECT_EQ(t.label, "tools[2] (suture)");
+  EXPECT_DOUBLE_EQ(t.start_s, 0.3);
+  EXPECT_DOUBLE_EQ(t.end_s, 0.5);
+  EXPECT_DOUBLE_EQ(t.stitch_target_mm, 1.5);
+  EXPECT_DOUBLE_EQ(t.stitch_stiffness_ratio, 0.5);
+  ASSERT_EQ(t.stitches.size(), 1u);
+  EXPECT_EQ(t.stitches[0].field, "tools[2].suture.stitches[0]");
+  EXPECT_EQ(t.stitches[0].b, (std::array<double, 3>{22, -15, 40}));
+  ASSERT_TRUE(t.along.has_value());
+  EXPECT_EQ(t.along->count, 3);
+  EXPECT_DOUBLE_EQ(t.along->width_mm, 4);
+  EXPECT_TRUE(s.close_cuts);  // on by default
+  EXPECT_FALSE(parse_scenario(replaced(text, "  coupling: nearest_particle", "  coupling: nearest_particle\n  close_cuts: false"), "s.yaml",
+                              "/base")
+                   .close_cuts);
+  struct Case {
+    std::string from, to, expected;
+  };
+  const Case cases[] = {
+      {"b: [22, -15, 40]", "b: [20, -15, 40]", "s.yaml: tools[2].suture.stitches[0].b: is the same point as a"},
+      {"b: [22, -15, 40]", "b: [60, -15, 40]", "s.yaml: tools[2].suture.stitches[0].b: is 40 mm from a (at most 30 mm)"},
+      {"end_s: 0.5\n      target", "end_s: 0.2\n      target", "s.yaml: tools[2].suture.end_s: must be after start_s"},
+      {"      end_s: 0.5\n      target", "      target", "s.yaml: tools[2].suture.end_s: missing"},
+      {"stiffness_ratio: 0.5", "stiffness_ratio: 0", "tools[2].suture.stiffness_ratio: must be > 0"},
+      {"target_length_mm: 1.5", "target_length_mm: -1", "tools[2].suture.target_length_mm: must be >= 0"},
+      {", across: [1, 0, 0]}", "}", "(accepted)"},  // without across: the timeline finds the outward side
+      {"from: [21, -18, 40], to: [21, -12, 40]", "from: [21, -18, 40], to: [21, -18, 40]",
+       "tools[2].suture.along.to: is the same point as from"},
+      {"across: [1, 0, 0]", "across: [0, 1, 0]", "tools[2].suture.along.across: must not be zero or along the line"},
+      {"count: 3", "count: 0", "tools[2].suture.along.count"},
+      {"      stitches:\n        - {a: [20, -15, 40], b: [22, -15, 40]}\n      along: {from: [21, -18, 40], to: [21, -12, 40], count: 3, width_mm: 4, across: [1, 0, 0]}\n",
+       "", "tools[2].suture: give stitches"},
+      {"      start_s: 0.3\n      end_s: 0.5", "      start_s: 0.7\n      end_s: 0.9", "tools[2] (suture).start_s: the tool starts after the run ends"},
+      {"kind: spring_grid", "kind: fem\n  tetmesh: t.h5",
+       "tools[2]: suture runs on the spring models only (kind: spring_grid or explicit_springs); stitches for kind: fem are not implemented"},
+  };
+  for (const auto& c : cases) {
+    const std::string e = error_of(replaced(text, c.from, c.to));
+    EXPECT_NE(e.find(c.expected), std::string::npos) << "for " << c.to << "\n got: " << e;
+  }
+  EXPECT_NE(error_of(replaced(replaced(kFull, "kind: spring_grid", "kind: fem\n  tetmesh: t.h5\n  close_cuts: true"), "  coupling: nearest_particle\n", ""))
+                .find("model.close_cuts: only for the spring models"),
+            std::string::npos);
+}

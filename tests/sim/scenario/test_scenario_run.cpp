@@ -14,6 +14,8 @@
 #include "ctsurg/mesh/marching_cubes.h"
 #include "ctsurg/sim/fem/fem_box_mesh.h"
 #include "ctsurg/sim/scenario/scenario.h"
+#include "ctsurg/sim/surface/hole_filling.h"
+#include "ctsurg/sim/surface/surface_measures.h"
 #include "fake_engine.h"
 #include "scenario_test_files.h"
 #include "sim_test_models.h"
@@ -96,7 +98,9 @@ TEST(ScenarioRun, SweptBladeCutsTheBarAndTheSurfaceOpens) {
   const std::string tools =
       "tools:\n  - cut:\n      blade_edge_mm: [0, 0, 20]\n      path:\n        - {t: 0.0, position_mm: [27, -25, 35]}\n"
       "        - {t: 0.02, position_mm: [27, -5, 35]}\n";
-  const auto s = parse_scenario(bar_scenario(tools, "time:\n  duration_s: 0.1\n", "") + "gravity_mm_per_s2: [0, 0, -9810]\n",
+  // The cut's holes are left open here (close_cuts: false), so the surface loses triangles.
+  const auto s = parse_scenario(bar_scenario(tools, "time:\n  duration_s: 0.1\n", "  close_cuts: false\n") +
+                                    "gravity_mm_per_s2: [0, 0, -9810]\n",
                                 dir.path() / "s.yaml", dir.path());
   RunReport report;
   const Trajectory t = run_scenario(s, &report);
@@ -522,4 +526,79 @@ TEST(ScenarioRun, WithoutASurfaceTheParticlesAreThePointSet) {
   EXPECT_EQ(surface, t.metric("max_displacement")->values);
   EXPECT_EQ(surface.front(), 0.0);
   EXPECT_NEAR(surface.back(), std::sqrt(13.0), 0.3);  // the grabbed end moved (0, -3, 2) mm
+}
+
+// The bar cut through at x = 27 mm, its free half pulled 3 mm away by a grab and let go, then sutured by
+// two stitches across the top (`along`, the across direction found from the tissue) and one across the
+// bottom (so the severed half cannot turn about the top stitches): the trajectory
+// holds the stitches (not placed, then placed), the gap between the halves closes from 5 mm to its rest
+// value 2 mm, and the cut surface stays closed (close_cuts by default) with the bar's volume less the
+// cut band's. A stitch off the tissue is refused naming the file and the field.
+TEST(ScenarioRun, CutThenSutureClosesTheBarAndTheSurfaceStaysClosed) {
+  TempDir dir;
+  write_bar(dir.path());
+  const std::string tools =
+      "tools:\n  - cut:\n      blade_edge_mm: [0, 0, 20]\n      path:\n        - {t: 0.0, position_mm: [27, -25, 35]}\n"
+      "        - {t: 0.02, position_mm: [27, -5, 35]}\n"
+      "  - grab:\n      radius_mm: 2.5\n      start_s: 0.03\n      end_s: 0.1\n      path:\n"
+      "        - {t: 0.03, position_mm: [42, -15, 35]}\n        - {t: 0.08, offset_mm: [3, 0, 0]}\n"
+      "  - suture:\n      start_s: 0.1\n      end_s: 0.2\n      target_length_mm: 2\n"
+      "      along: {from: [27, -17, 39], to: [27, -13, 39], count: 2, width_mm: 2}\n"
+      "      stitches:\n        - {a: [26, -15.2, 31], b: [28, -15.2, 31]}\n";
+  const std::string text = bar_scenario(tools, "time:\n  duration_s: 0.3\n") + "  particles: true\n";
+  const auto s = parse_scenario(text, dir.path() / "s.yaml", dir.path());
+  RunReport report;
+  const Trajectory run = run_scenario(s, &report);
+  write_trajectory_file(dir.path() / "out.h5", run, ctsurg::test::test_provenance());
+  const Trajectory t = read_trajectory_file(dir.path() / "out.h5");
+  ASSERT_EQ(t.stitch_count(), 3);
+  ASSERT_EQ(t.frame_count(), 31);
+  const auto stitch = [&](int64_t f, int64_t k) { return &t.stitches[static_cast<size_t>(7 * (f * 3 + k))]; };
+  EXPECT_EQ(stitch(9, 0)[6], 0.0);   // t = 0.09 s: not placed
+  EXPECT_EQ(stitch(11, 1)[6], 1.0);  // t = 0.11 s: placed
+  // Not placed, a stitch is drawn where the scenario puts it: the listed ones first, then the line's,
+  // width_mm across the line (along +x, found from the tissue).
+  EXPECT_NEAR(stitch(0, 0)[2], 31, 1e-9);
+  EXPECT_NEAR(stitch(0, 1)[0], 26, 1e-6);
+  EXPECT_NEAR(stitch(0, 1)[3], 28, 1e-6);
+  EXPECT_NEAR(stitch(0, 1)[1], -16, 1e-6);
+  // The gap across x = 27 between the halves' particles.
+  const auto gap = [&](int64_t f) {
+    double lo = 1e30, hi = -1e30;
+    for (int64_t i = 0; i < t.particle_count(); ++i) {
+      const double x = t.particles[static_cast<size_t>(3 * (f * t.particle_count() + i))];
+      if (t.rest_particles[static_cast<size_t>(3 * i)] > 27) {
+        lo = std::min(lo, x);
+      } else {
+        hi = std::max(hi, x);
+      }
+    }
+    return lo - hi;
+  };
+  EXPECT_NEAR(gap(0), 2.0, 1e-4);
+  EXPECT_GT(gap(10), 4.5);  // pulled open by the grab, let go at 0.1 s
+  EXPECT_NEAR(gap(30), 2.0, 0.2) << "gap at 0.1 s " << gap(10) << " mm";
+  // The closed surface: no boundary edge (welded at seams: none here), and the volume of the bar less the
+  // cut band (one cell, 2 of its 32 mm), to 3 %.
+  const std::vector<uint32_t>& last = t.frame_triangles(t.frame_count() - 1);
+  EXPECT_TRUE(boundary_edges(last).empty());
+  EXPECT_GT(last.size(), 0u);
+  // The trajectory says which triangles close the holes (the last ones of each topology after the cut).
+  ASSERT_EQ(t.closing_triangles.size(), t.topologies.size());
+  EXPECT_EQ(t.closing_triangles.front(), 0);
+  EXPECT_GT(t.closing_triangles.back(), 0);
+  const double v0 = t.metric("enclosed_volume")->values.front(), v = t.metric("enclosed_volume")->values.back();
+  EXPECT_NEAR(v, v0 * 30.0 / 32.0, 0.03 * v0) << "v0 " << v0 << " v " << v;
+  // A line rising off the bar: its second stitch is 8.5 mm above the top particles (at most 3 cells, 6 mm).
+  std::string off = text;
+  const std::string line_end = "to: [27, -13, 39]";
+  off.replace(off.find(line_end), line_end.size(), "to: [27, -13, 49]");
+  const auto bad = parse_scenario(off, dir.path() / "s.yaml", dir.path());
+  try {
+    (void)run_scenario(bad, nullptr);
+    ADD_FAILURE() << "a stitch off the tissue was accepted";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.file(), (dir.path() / "s.yaml").string());
+    EXPECT_NE(e.field().find("tools[2].suture.along (stitch 2 of 2).a"), std::string::npos) << e.what();
+  }
 }

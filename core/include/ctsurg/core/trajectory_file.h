@@ -10,6 +10,8 @@
 //   /trajectory/surface/vertices           (F, V, 3)  float32  LPS mm
 //   /trajectory/surface/topologies/<k>     (T_k, 3)   uint32   triangles, k = "0", "1", ... in order
 //   /trajectory/surface/topology_of_frame  (F)        int32    the topology each frame uses
+//   /trajectory/surface/closing_triangles  (K)        int64    optional, one per topology: how many of its last
+//                                          triangles close the holes a cut left (drawn as the wound's inside)
 //   /trajectory/metrics/<name>             (F)        float64  attribute units (e.g. kinetic_energy, nJ)
 //   /trajectory/tools/spheres              (F, S, 4)  float64  centre xyz LPS mm, radius mm (0: inactive)
 //                                          attribute kinds: "grab;probe;..." (one per sphere)
@@ -18,6 +20,9 @@
 //   /trajectory/tools/instruments/<k>/triangles  (T_k, 3) uint32  (attribute name: the mesh file)
 //   /trajectory/tools/instrument_poses     (F, I, 8)  float64  active 1/0, rotation w x y z (unit), translation
 //                                          LPS mm: a vertex q of instrument k is at R q + t (optional: I = 0)
+//   /trajectory/tools/stitches             (F, K, 7)  float64  a suture's stitch: end a xyz, end b xyz (LPS mm, the
+//                                          points it joins, moving with the tissue), placed 1/0 (optional: K = 0;
+//                                          files without it read as K = 0)
 //   /trajectory/particles/rest_positions   (P, 3)     float32  optional: the model's nodes at rest
 //   /trajectory/particles/positions        (F, P, 3)  float32  optional: the nodes at each frame
 //
@@ -59,12 +64,14 @@ struct Trajectory {
   std::vector<float> vertices;                     // F x V x 3, LPS mm
   std::vector<std::vector<uint32_t>> topologies;   // each T_k x 3
   std::vector<int32_t> topology_of_frame;          // F, index into topologies
+  std::vector<int64_t> closing_triangles;          // one per topology (its last triangles closing cut holes), or empty
   std::vector<TrajectoryMetric> metrics;
   std::vector<std::string> sphere_kinds;           // S: "grab" or "probe"
   std::vector<double> spheres;                     // F x S x 4
   std::vector<double> blades;                      // F x B x 7
   std::vector<TrajectoryInstrument> instruments;   // I
   std::vector<double> instrument_poses;            // F x I x 8: active, w x y z, t (LPS mm)
+  std::vector<double> stitches;                    // F x K x 7: end a, end b (LPS mm), placed 1/0; or empty
   std::vector<float> rest_particles;               // P x 3 or empty
   std::vector<float> particles;                    // F x P x 3 or empty
 
@@ -72,6 +79,7 @@ struct Trajectory {
   int64_t vertex_count() const { return static_cast<int64_t>(rest_vertices.size() / 3); }
   int64_t sphere_count() const { return static_cast<int64_t>(sphere_kinds.size()); }
   int64_t blade_count() const { return frame_count() ? static_cast<int64_t>(blades.size()) / (7 * frame_count()) : 0; }
+  int64_t stitch_count() const { return frame_count() ? static_cast<int64_t>(stitches.size()) / (7 * frame_count()) : 0; }
   int64_t particle_count() const { return static_cast<int64_t>(rest_particles.size() / 3); }
   // The metric called `name`, or nullptr.
   const TrajectoryMetric* metric(const std::string& name) const;

@@ -21,14 +21,22 @@ struct ToolBlade {
   float a[3], b[3];  // the cutting edge's ends, LPS mm
 };
 
+// A stitch is drawn as an 8-sided cylinder of this radius (mm): a 3-0 suture is 0.2-0.25 mm across,
+// drawn thicker to be seen at an organ's scale.
+inline constexpr float kStitchRadiusMm = 0.35f;
+
 struct SceneFrame {
   const float* vertices = nullptr;                // #V x 3, LPS mm (not owned)
   const std::vector<uint32_t>* triangles = nullptr;  // #T x 3 (not owned)
   int topology = 0;                               // id of `triangles` (cache key for frames)
+  int64_t closing_triangles = 0;                  // the last ones of `triangles` close cut holes: drawn as
+                                                  //   the wound's inside
   std::vector<ToolSphere> spheres;                // active spheres only
   std::vector<ToolBlade> blades;                  // active blades only
   std::vector<float> instrument_triangles;        // active instruments at their poses: #T x 3 corners x
                                                   //   (position LPS mm, unit face normal), flat shaded
+  std::vector<float> stitch_triangles;            // placed stitches as thin cylinders (kStitchRadiusMm), the
+                                                  //   same layout as instrument_triangles
   std::vector<float> values;                      // #V heat-map values (mm) or empty
 };
 

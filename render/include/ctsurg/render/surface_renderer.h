@@ -9,9 +9,11 @@
 // Shading, per pixel: the tangent-space normal map applied in the deformed tangent frame
 // (deformed_tangent_frames.h), Blinn-Phong with a key light above-left of the camera, a fill light and
 // a little ambient. Two-sided: back faces (the inside, seen through a cut) get the flipped normal and
-// a darker red, so incisions read clearly. Heat maps colour the surface through the Turbo table
+// a darker red, so incisions read clearly; so do the triangles closing a cut's holes (SceneFrame::
+// closing_triangles), front or back, so a closed incision still reads as a wound. Heat maps colour the surface through the Turbo table
 // (colour_map.h) at value / heat_max_mm, keeping the lighting. Tools: spheres as translucent
-// icospheres (grab green, probe blue), blades as translucent steel quads on the cutting edge.
+// icospheres (grab green, probe blue), blades as translucent steel quads on the cutting edge, suture
+// stitches as opaque violet cylinders.
 #pragma once
 
 #include <memory>

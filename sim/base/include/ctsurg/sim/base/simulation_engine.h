@@ -11,7 +11,8 @@
 // and moves it with its centre until it stops being active (then it lets go, for good); a probe pushes
 // the model out of its sphere while active; a force spreads its total force over what is inside its
 // sphere when it starts, until it ends; an instrument (a rigid closed mesh at a position and an
-// orientation) pushes the model out of itself while active; a blade cuts what its edge crossed along the straight
+// orientation) pushes the model out of itself while active; a suture joins pairs of points with stitches
+// placed when it starts, tightened over its window and kept after it (springs/suture.h); a blade cuts what its edge crossed along the straight
 // segments its centre swept since its last sweep (the caller decides when a blade sweeps:
 // blade_sweep_mm()).
 //
@@ -43,7 +44,7 @@ namespace ctsurg::sim {
 
 using Vec3 = std::array<double, 3>;
 
-enum class ToolKind { grab, probe, cut, force, instrument };
+enum class ToolKind { grab, probe, cut, force, instrument, suture };
 const char* to_string(ToolKind kind);
 
 // One tool at the end of a step (or at a quasi-static frame's time).
@@ -61,6 +62,13 @@ struct ToolInput {
                                             //   since its last sweep, in order; empty: no cut now
   std::shared_ptr<const Instrument> instrument;  // instrument: its shape (base/instrument.h)
   Quaternion orientation = kIdentityRotation;    // instrument: its rotation now (its frame -> the run's)
+  double end_s = 0;                              // when its window closes, s (+inf: the end of the run)
+  // suture: each stitch's two points (mm, local frame), joined when the window opens; its rest length
+  // goes to stitch_target_mm by end_s and stays there. stitch_fields names each stitch in messages.
+  std::vector<std::array<Vec3, 2>> stitches;
+  std::vector<std::string> stitch_fields;
+  double stitch_target_mm = 0;                   // mm, >= 0
+  double stitch_stiffness_ratio = 1;             // x the model's stiffest spring (> 0)
 };
 
 // What every engine is built with (an engine adds its own: fem_engine.h's solver).
@@ -128,11 +136,17 @@ class SimulationEngine {
   // The surface's vertices (#V x 3 mm, local), or the nodes' positions when there is no surface.
   virtual void surface_vertices(std::vector<float>& xyz) = 0;
   virtual const std::vector<uint32_t>& triangles() const = 0;  // the surface now (#F x 3); empty: none
+  // How many of triangles()' last triangles close the holes a cut left (surface/hole_filling.h).
+  virtual int64_t closing_triangles() const { return 0; }
   virtual const std::vector<Real>& surface_rest_vertices() const = 0;  // #V x 3 mm, local; empty: none
   virtual EngineMetrics metrics() const = 0;
   // Whether tool `tool` (an index into the tool list) holds something: a grab its capture, a force
   // the nodes it loads.
   virtual bool engaged(size_t tool) const = 0;
+  // A suture's stitches now (tool: an index into the tool list): each stitch's two points (mm, local
+  // frame; they move with the nodes they joined). Empty before the stitches are placed, and for an
+  // engine without sutures.
+  virtual std::vector<std::array<Vec3, 2>> stitches([[maybe_unused]] size_t tool) const { return {}; }
 
   // Stability and restarts.
   virtual StabilityReport check_stability() = 0;

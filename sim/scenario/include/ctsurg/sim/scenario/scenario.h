@@ -47,6 +47,23 @@ struct Keyframe {
   std::optional<Quaternion> rotation;
 };
 
+// suture: one stitch, its two points (LPS mm) and the field that gave it (for messages).
+struct StitchSpec {
+  std::array<double, 3> a{0, 0, 0}, b{0, 0, 0};
+  std::string field;  // e.g. "tools[1].suture.stitches[0]"
+};
+
+// suture: `count` stitches spaced along the line from -> to (LPS mm), stitch k at fraction (k + 1/2) /
+// count, each joining the points width_mm / 2 either side of the line along `across` (LPS; absent: the
+// line's direction x the tissue's outward direction there, tool_timeline.h).
+struct SutureLine {
+  std::array<double, 3> from{0, 0, 0}, to{0, 0, 0};
+  int count = 1;
+  double width_mm = 0;
+  std::optional<std::array<double, 3>> across;
+  std::string field;  // "tools[1].suture.along"
+};
+
 struct ToolAction {
   ToolKind kind = ToolKind::grab;    // base/simulation_engine.h
   std::string label;                 // "tools[0] (grab)", for messages
@@ -63,6 +80,12 @@ struct ToolAction {
   // that pushes the tissue out of itself (base/instrument.h), and its distance grid's spacing (0: auto).
   std::filesystem::path instrument_mesh;
   double instrument_spacing_mm = 0;
+  // suture: stitches placed at start_s, tightened to stitch_target_mm (mm, >= 0) by end_s and kept to the
+  // end of the run; stiffness stitch_stiffness_ratio x the model's stiffest spring (springs/suture.h).
+  std::vector<StitchSpec> stitches;
+  std::optional<SutureLine> along;
+  double stitch_target_mm = 0;
+  double stitch_stiffness_ratio = 1;
 };
 
 // A picture the pipeline makes from the trajectory with ctsurg-render (scripts/Makefile); ctsurg-sim
@@ -124,6 +147,7 @@ struct Scenario {
   FemSolver fem_solver = FemSolver::dynamic;                       // kind: fem
   int fem_order = 1;  // kind: fem; elements: linear (1, 4-node tets) | quadratic (2, 10-node; static and implicit)
   bool mass_from_fraction = false;
+  bool close_cuts = true;           // spring models: close the holes a cut leaves in the surface (hole_filling.h)
   Material material;                // preset, possibly with explicit overrides
   double damping_per_s = 0;         // mass-proportional damping rate alpha, 1/s (Verlet factor alpha dt)
   double stiffness_damping_s = 0;   // fem implicit: Rayleigh stiffness damping beta, s

@@ -15,6 +15,11 @@
 // Windows. A tool is active from start_s to end_s: start_s - 1e-12 <= t < end_s (the tolerance keeps a
 // step that lands on start_s in floating point from missing it).
 //
+// Sutures. Their stitches' points become points of the local frame; a line of stitches (`along`) is
+// spaced along its line, each stitch across it along `across` or, without one, along the line's
+// direction x the tissue's outward direction at the line's middle (from the centroid of the rest
+// particles within 15 mm of it to the middle). A suture's path is its first stitch's first point.
+//
 // Blades. A blade sweeps from where its last sweep ended once its centre has moved min_sweep_mm (the
 // engine's blade_sweep_mm(): a quarter of the shortest spring, so no spring slips between two sweeps),
 // or reaches a keyframe or its end: each sweep then lies on one straight segment of the path, a planar
@@ -38,9 +43,10 @@ namespace ctsurg::sim {
 class ToolTimeline {
  public:
   // tools: the scenario's; rest: the model's rest positions (#P x 3 mm, local frame: LPS minus
-  // `origin`); note receives what was decided (path snaps; may be empty).
+  // `origin`); note receives what was decided (path snaps; may be empty); where names the scenario in
+  // messages (InputError(where, "tools[i].suture.along", ...) for a suture line off the tissue).
   ToolTimeline(const std::vector<ToolAction>& tools, const std::vector<double>& rest, const Vec3& origin,
-               const std::function<void(const std::string&)>& note = {});
+               const std::function<void(const std::string&)>& note = {}, const std::string& where = "scenario");
 
   size_t size() const { return tools_.size(); }
   const ToolAction& tool(size_t i) const { return tools_[i].spec; }
@@ -48,6 +54,8 @@ class ToolTimeline {
   Quaternion orientation(size_t i, double t) const;  // an instrument's rotation (others: the identity)
   // An instrument's shape (null for the other tools).
   const std::shared_ptr<const Instrument>& instrument(size_t i) const { return tools_[i].instrument; }
+  // A suture's stitches as given (mm, local frame), in order: its stitches, then its line's.
+  const std::vector<std::array<Vec3, 2>>& stitch_points(size_t i) const { return tools_[i].stitch_points; }
   bool active(size_t i, double t) const;
   // Whether no tool acts (starts, moves or holds) in (t0, t1].
   bool idle(double t0, double t1) const;
@@ -70,6 +78,8 @@ class ToolTimeline {
     Path path;
     std::optional<double> cut_from;  // a blade: the time its current sweep started
     std::shared_ptr<const Instrument> instrument;
+    std::vector<std::array<Vec3, 2>> stitch_points;  // suture: mm, local frame
+    std::vector<std::string> stitch_fields;          // suture: each stitch's field, for messages
   };
   void sweeps(Tool& tool, double t0, double t1, double min_sweep_mm, std::vector<std::array<Vec3, 2>>& out) const;
 

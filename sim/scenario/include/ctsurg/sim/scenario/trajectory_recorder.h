@@ -1,8 +1,8 @@
 // Collects a run's output frames into a Trajectory (core/trajectory_file.h): per frame the time, the
 // surface's vertices (or the nodes' when the scenario has no surface) and its topology when a cut
-// changed it, optionally every node's position, the tools (spheres: centre and radius, 0 when not
+// changed it (and how many of its last triangles close the cut's holes), optionally every node's position, the tools (spheres: centre and radius, 0 when not
 // acting; blades: the edge's ends and whether it is active; instruments: their meshes once and their
-// poses per frame), and the metrics:
+// poses per frame; stitches: their two points and whether they are placed), and the metrics:
 //
 //   kinetic_energy (nJ), elastic_energy (nJ), max_displacement (mm, over the nodes),
 //   surface_max_displacement (mm, over the surface's vertices; the nodes' when there is none),
@@ -44,6 +44,8 @@ class TrajectoryRecorder {
   Vec3 origin_;
   bool write_particles_;
   size_t blades_ = 0;               // cut tools
+  size_t stitches_ = 0;             // the sutures' stitches
+  std::vector<int64_t> closing_;    // per topology: its last triangles closing cut holes
   std::vector<TrajectoryMetric> metrics_;
   std::vector<float> vertices_;    // scratch: the frame's vertices, local frame
   std::vector<double> positions_;  // scratch: the nodes' positions, local frame

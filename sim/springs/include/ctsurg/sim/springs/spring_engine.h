@@ -7,8 +7,11 @@
 // it): a grab's particles are set to its centre plus their offsets (captured at the first step it is
 // active: the particles strictly inside its sphere; released when it stops), a probe pushes the free
 // particles out of its sphere, a force adds (F / n) / m dt^2 to each of the n free particles inside its
-// sphere at its start (the same update as the force inside the step), and a blade cuts every spring
-// and surface triangle its edge crossed along each sweep (two triangles per sweep: tool_shapes.h).
+// sphere at its start (the same update as the force inside the step), a suture's stitches pull their
+// particles (suture.h: placed when it starts, tightened over its window, kept after), and a blade cuts
+// every spring and surface triangle its edge crossed along each sweep (two triangles per sweep:
+// tool_shapes.h); with the surface's close_cuts, the holes the sweep left are then closed
+// (hole_filling.h).
 //
 // Stability: check_stability() runs the guard (stability.h) on the state; energy growth is not
 // counted over an interval in which a tool acted. On the CPU the engine restarts from its last
@@ -32,6 +35,7 @@
 #include "ctsurg/sim/springs/spring_grid_model.h"
 #include "ctsurg/sim/springs/spring_mass_step.h"
 #include "ctsurg/sim/springs/stability.h"
+#include "ctsurg/sim/springs/suture.h"
 #include "ctsurg/sim/surface/embedded_surface.h"
 
 #include <functional>
@@ -86,9 +90,13 @@ class SpringEngine final : public SimulationEngine {
   void positions(std::vector<double>& xyz) const override;
   void surface_vertices(std::vector<float>& xyz) override;
   const std::vector<uint32_t>& triangles() const override { return surface_.triangles(); }
+  int64_t closing_triangles() const override { return surface_.fill_triangle_count(); }
   const std::vector<Real>& surface_rest_vertices() const override { return surface_.rest_vertices(); }
   EngineMetrics metrics() const override;
   bool engaged(size_t tool) const override;
+  std::vector<std::array<Vec3, 2>> stitches(size_t tool) const override;
+  // The stiffness a stitch gets per unit of stitch_stiffness_ratio: the model's stiffest spring, g/s^2.
+  double stitch_unit_stiffness() const { return stitch_unit_stiffness_; }
 
   StabilityReport check_stability() override;
   bool can_restart() const override;
@@ -102,6 +110,8 @@ class SpringEngine final : public SimulationEngine {
     int handle = -1;              // grab: the stepper's name for it (a device holds several)
     std::vector<int32_t> loaded;  // force: the free particles sharing it
     bool released = false;        // let go, for good
+    std::vector<Stitch> stitches; // suture: placed when it starts
+    SutureSchedule schedule;      // suture: how they tighten
   };
   struct Checkpoint {
     ParticleState state;
@@ -114,6 +124,8 @@ class SpringEngine final : public SimulationEngine {
 
   void apply_tools(const std::vector<ToolInput>& tools);
   void sweep_blade(const ToolInput& blade, const Vec3& from, const Vec3& to);
+  void place_stitches(const ToolInput& suture, Hold& hold);
+  double spring_sum(int32_t particle) const;  // K_i: the stiffness of the particle's present springs, g/s^2
   void note(const std::string& text) const;
   StabilityGuard make_guard() const;
 
@@ -126,6 +138,8 @@ class SpringEngine final : public SimulationEngine {
   std::vector<double> rest_;     // the same in double (exactly)
   CriticalStep critical_;
   double blade_sweep_mm_;        // a quarter of the shortest spring (rest lengths do not change)
+  double shortest_spring_mm_;    // mm
+  double stitch_unit_stiffness_; // g/s^2
   StepParameters params_;
   StabilityGuard guard_;
   EngineCounts counts_;

@@ -2,7 +2,8 @@
 // nodes (a grid model's lattice cell: surface_coupling.h; a tet: tet_embedding.h). It follows the nodes'
 // displacements (move) and is cut with the same blade as the model's springs (cut: crossed triangles
 // removed, vertices detached from nodes across the blade; surface_cutting.h), so an incision opens on
-// screen. A simulation engine (base/simulation_engine.h) keeps one with its model; empty when the
+// screen. With close_cuts, the holes a cut leaves are closed with new triangles over the existing
+// vertices (hole_filling.h) so the surface stays closed for rendering and volume. A simulation engine (base/simulation_engine.h) keeps one with its model; empty when the
 // scenario has no surface.
 //
 // Units: mm, in the engine's local frame.
@@ -13,6 +14,7 @@
 #include "ctsurg/sim/surface/surface_coupling.h"
 
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 namespace ctsurg::sim {
@@ -26,7 +28,9 @@ class EmbeddedSurface {
 
   bool empty() const { return coupling_.rest_vertices.empty(); }
   int64_t vertex_count() const { return coupling_.vertex_count(); }
-  const std::vector<uint32_t>& triangles() const { return triangles_; }  // #F x 3, now
+  // #F x 3, now: the uncut triangles, then (close_cuts) the triangles closing the cut holes.
+  const std::vector<uint32_t>& triangles() const { return triangles_; }
+  int64_t fill_triangle_count() const { return static_cast<int64_t>(triangles_.size() - cut_.size()) / 3; }
   const std::vector<Real>& rest_vertices() const { return coupling_.rest_vertices; }  // #V x 3 mm
   const SurfaceCoupling& coupling() const { return coupling_; }
 
@@ -38,13 +42,24 @@ class EmbeddedSurface {
   int64_t cut(const Triangle& blade, const std::vector<float>& vertices, const ParticleState& positions);
   // Removes the triangles crossing the blade, leaving the ties alone (remove_crossed_triangles).
   int64_t cut_triangles(const Triangle& blade, const std::vector<float>& vertices);
+  // Whether the holes cuts leave are closed (hole_filling.h); off by default. The surface's own
+  // boundary (an open surface) is the one it has when this is switched on, and is never closed.
+  void set_close_cuts(bool close);
+  bool close_cuts() const { return close_cuts_; }
+  // Re-closes every cut hole over `vertices` (#V x 3 mm, now: move()); call after a sweep's cuts. Does
+  // nothing unless close_cuts. Returns the number of closing triangles.
+  int64_t close_cut_holes(const std::vector<float>& vertices);
   // New node ids for every tie (#V x 8, as coupling().particles; weights kept): a model that split nodes
   // (fem/fem_cutting.h) moves each vertex to the copies of its own element. InputError on a size mismatch.
   void retie(std::vector<int32_t> particles);
 
  private:
   SurfaceCoupling coupling_;
-  std::vector<uint32_t> triangles_;
+  std::vector<uint32_t> cut_;        // #F x 3: the surface's triangles the cuts left
+  std::vector<uint32_t> triangles_;  // cut_, then the closing triangles
+  std::vector<uint32_t> weld_;       // hole_filling.h weld_coincident() of the rest vertices
+  std::vector<std::pair<uint32_t, uint32_t>> own_boundary_;  // boundary_edges() before any cut (welded ids)
+  bool close_cuts_ = false;
 };
 
 }  // namespace ctsurg::sim
