@@ -458,6 +458,20 @@ void SurfaceRenderer::draw(const SceneFrame& frame, const Camera& camera, const 
     // Translucent tools over the opaque surface: blended, depth-tested, not writing depth.
     const GLuint q = s.tool_program;
     glUseProgram(q);
+    // A soup of triangles (#3T corners x (position LPS mm, unit normal)) in one colour, through the
+    // blade buffer, placed as they are (no centre, unit scale).
+    const auto draw_soup = [&](const std::vector<float>& corners, const float* colour) {
+      glBindVertexArray(s.blade_vao);
+      glBindBuffer(GL_ARRAY_BUFFER, s.blade_vbo);
+      glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(corners.size() * sizeof(float)), corners.data(), GL_STREAM_DRAW);
+      const float zero[3] = {0.0f, 0.0f, 0.0f};
+      glUniform4fv(glGetUniformLocation(q, "u_colour"), 1, colour);
+      glUniform3fv(glGetUniformLocation(q, "u_centre"), 1, zero);
+      glUniform1f(glGetUniformLocation(q, "u_scale"), 1.0f);
+      glDrawArrays(GL_TRIANGLES, 0, static_cast<GLsizei>(corners.size() / 6));
+    };
+    const float steel_blade[4] = {0.78f, 0.8f, 0.84f, 0.6f}, steel_instrument[4] = {0.72f, 0.74f, 0.78f, 0.85f},
+                violet[4] = {0.42f, 0.2f, 0.75f, 1.0f};
     glUniformMatrix4fv(glGetUniformLocation(q, "u_view_projection"), 1, GL_FALSE, vp.data());
     glUniform3fv(glGetUniformLocation(q, "u_key"), 1, key.data());
     glUniform3fv(glGetUniformLocation(q, "u_fill"), 1, fill.data());
@@ -500,45 +514,17 @@ void SurfaceRenderer::draw(const SceneFrame& frame, const Camera& camera, const 
         const Eigen::Vector3d corners[6] = {a, e, e + h, a, e + h, a + h};
         for (const auto& c : corners) quads.insert(quads.end(), {float(c.x()), float(c.y()), float(c.z()), float(n.x()), float(n.y()), float(n.z())});
       }
-      glBindVertexArray(s.blade_vao);
-      glBindBuffer(GL_ARRAY_BUFFER, s.blade_vbo);
-      glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(quads.size() * sizeof(float)), quads.data(), GL_STREAM_DRAW);
-      const float steel[4] = {0.78f, 0.8f, 0.84f, 0.6f};
-      const float zero[3] = {0.0f, 0.0f, 0.0f};
-      glUniform4fv(glGetUniformLocation(q, "u_colour"), 1, steel);
-      glUniform3fv(glGetUniformLocation(q, "u_centre"), 1, zero);
-      glUniform1f(glGetUniformLocation(q, "u_scale"), 1.0f);
-      glDrawArrays(GL_TRIANGLES, 0, static_cast<GLsizei>(quads.size() / 6));
+      draw_soup(quads, steel_blade);
     }
     if (!frame.instrument_triangles.empty()) {
       // Instruments: steel, nearly opaque, their back faces culled (closed meshes wound outwards).
       glEnable(GL_CULL_FACE);
       glCullFace(GL_BACK);
-      glBindVertexArray(s.blade_vao);
-      glBindBuffer(GL_ARRAY_BUFFER, s.blade_vbo);
-      glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(frame.instrument_triangles.size() * sizeof(float)),
-                   frame.instrument_triangles.data(), GL_STREAM_DRAW);
-      const float steel[4] = {0.72f, 0.74f, 0.78f, 0.85f};
-      const float zero[3] = {0.0f, 0.0f, 0.0f};
-      glUniform4fv(glGetUniformLocation(q, "u_colour"), 1, steel);
-      glUniform3fv(glGetUniformLocation(q, "u_centre"), 1, zero);
-      glUniform1f(glGetUniformLocation(q, "u_scale"), 1.0f);
-      glDrawArrays(GL_TRIANGLES, 0, static_cast<GLsizei>(frame.instrument_triangles.size() / 6));
+      draw_soup(frame.instrument_triangles, steel_instrument);
       glDisable(GL_CULL_FACE);
     }
-    if (!frame.stitch_triangles.empty()) {
-      // Stitches: opaque violet (the colour of dyed absorbable sutures, seen against red tissue).
-      glBindVertexArray(s.blade_vao);
-      glBindBuffer(GL_ARRAY_BUFFER, s.blade_vbo);
-      glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(frame.stitch_triangles.size() * sizeof(float)),
-                   frame.stitch_triangles.data(), GL_STREAM_DRAW);
-      const float violet[4] = {0.42f, 0.2f, 0.75f, 1.0f};
-      const float zero[3] = {0.0f, 0.0f, 0.0f};
-      glUniform4fv(glGetUniformLocation(q, "u_colour"), 1, violet);
-      glUniform3fv(glGetUniformLocation(q, "u_centre"), 1, zero);
-      glUniform1f(glGetUniformLocation(q, "u_scale"), 1.0f);
-      glDrawArrays(GL_TRIANGLES, 0, static_cast<GLsizei>(frame.stitch_triangles.size() / 6));
-    }
+    // Stitches: opaque violet (the colour of dyed absorbable sutures, seen against red tissue).
+    if (!frame.stitch_triangles.empty()) draw_soup(frame.stitch_triangles, violet);
     glDepthMask(GL_TRUE);
     glDisable(GL_BLEND);
   }

@@ -4,6 +4,7 @@
 #include "ctsurg/core/tet_mesh_file.h"
 #include "ctsurg/sim/collision/vertex_triangle_contacts.h"
 #include "ctsurg/sim/fem/fem_cutting.h"
+#include "mesh_graph.h"
 
 #include <algorithm>
 #include <array>
@@ -81,12 +82,7 @@ FemContact::FemContact(const FemModel& model, const FemContactOptions& options) 
   std::vector<std::pair<int32_t, int32_t>> node_face;
   for (size_t f = 0; f < faces_.size() / 3; ++f)
     for (int k = 0; k < 3; ++k) node_face.emplace_back(static_cast<int32_t>(faces_[3 * f + static_cast<size_t>(k)]), static_cast<int32_t>(f));
-  std::sort(node_face.begin(), node_face.end());
-  node_faces_offsets_.assign(static_cast<size_t>(nn) + 1, 0);
-  for (const auto& [n, f] : node_face) ++node_faces_offsets_[static_cast<size_t>(n) + 1];
-  std::partial_sum(node_faces_offsets_.begin(), node_faces_offsets_.end(), node_faces_offsets_.begin());
-  node_faces_.resize(node_face.size());
-  for (size_t k = 0; k < node_face.size(); ++k) node_faces_[k] = node_face[k].second;
+  build_csr(nn, node_face, node_faces_offsets_, node_faces_);
 }
 
 void FemContact::detect(const std::vector<double>& x, std::vector<Pair>& pairs) const {
@@ -264,17 +260,10 @@ BodySeparation separate_bodies(TetMesh& mesh, bool by_label, const std::vector<H
   // Each face-connected piece of one region smaller than 1 % of the mesh (at least 20 tets) joins the
   // region it shares most faces with, until none is left (or 8 rounds).
   for (int round = 0; round < 8; ++round) {
-    std::vector<int32_t> parent(static_cast<size_t>(nt));
-    std::iota(parent.begin(), parent.end(), 0);
-    const auto find = [&](int32_t x) {
-      while (parent[static_cast<size_t>(x)] != x) x = parent[static_cast<size_t>(x)] = parent[static_cast<size_t>(parent[static_cast<size_t>(x)])];
-      return x;
-    };
+    UnionFind pieces(static_cast<size_t>(nt));
+    const auto find = [&](int32_t x) { return pieces.find(x); };
     for (const auto& [a, b] : adjacent)
-      if (region[static_cast<size_t>(a)] == region[static_cast<size_t>(b)]) {
-        const int32_t ra = find(a), rb = find(b);
-        if (ra != rb) parent[static_cast<size_t>(std::max(ra, rb))] = std::min(ra, rb);
-      }
+      if (region[static_cast<size_t>(a)] == region[static_cast<size_t>(b)]) pieces.unite(a, b);
     std::vector<int32_t> size(static_cast<size_t>(nt), 0);
     for (int32_t e = 0; e < nt; ++e) ++size[static_cast<size_t>(find(e))];
     const int32_t small = std::max(20, nt / 100);
