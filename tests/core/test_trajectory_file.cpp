@@ -224,3 +224,51 @@ TEST(TrajectoryFile, StitchesAndClosingTrianglesRoundTripAndAreChecked) {
   bad.closing_triangles = {0, 4};  // topology 1 has 3 triangles
   refused(bad, "/trajectory/surface/closing_triangles");
 }
+
+TEST(TrajectoryFile, InstrumentsRoundTripAndAreChecked) {
+  // A tetrahedral instrument at a pose per frame (active from frame 1, turned 90 degrees about z): its
+  // mesh comes back once, its poses per frame; a trajectory without one reads as none.
+  TempDir dir;
+  auto t = three_frames(false);
+  ctsurg::TrajectoryInstrument ins;
+  ins.name = "probe.stl";
+  ins.vertices = {0, 0, 0, 5, 0, 0, 0, 5, 0, 0, 0, 5};
+  ins.triangles = {0, 2, 1, 0, 1, 3, 0, 3, 2, 1, 2, 3};
+  t.instruments = {ins};
+  const double h = std::sqrt(0.5);
+  t.instrument_poses = {0, 1, 0, 0, 0, 10, 20, 650,  //
+                        1, h, 0, 0, h, 10, 20, 648,  //
+                        1, h, 0, 0, h, 10, 20, 646};
+  ctsurg::write_trajectory_file(dir.path() / "i.h5", t, test_provenance());
+  const auto r = ctsurg::read_trajectory_file(dir.path() / "i.h5");
+  ASSERT_EQ(r.instruments.size(), 1u);
+  EXPECT_EQ(r.instruments[0].name, "probe.stl");
+  EXPECT_EQ(r.instruments[0].vertices, ins.vertices);
+  EXPECT_EQ(r.instruments[0].triangles, ins.triangles);
+  EXPECT_EQ(r.instrument_poses, t.instrument_poses);
+  EXPECT_TRUE(ctsurg::read_trajectory_file([&] {
+                ctsurg::write_trajectory_file(dir.path() / "none.h5", three_frames(false), test_provenance());
+                return dir.path() / "none.h5";
+              }())
+                  .instruments.empty());
+  const auto refused = [&](ctsurg::Trajectory bad, const std::string& field) {
+    try {
+      ctsurg::validate_trajectory(bad, "x.h5");
+      ADD_FAILURE() << "accepted a bad " << field;
+    } catch (const ctsurg::InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(field), std::string::npos) << e.what();
+    }
+  };
+  auto bad = t;
+  bad.instrument_poses.pop_back();
+  refused(bad, "/trajectory/tools/instrument_poses");
+  bad = t;
+  bad.instrument_poses[1] = 2;  // not a unit quaternion
+  refused(bad, "/trajectory/tools/instrument_poses");
+  bad = t;
+  bad.instruments[0].triangles[0] = 4;  // no vertex 4
+  refused(bad, "/trajectory/tools/instruments/0/triangles");
+  bad = t;
+  bad.instruments[0].vertices[0] = std::numeric_limits<float>::infinity();
+  refused(bad, "/trajectory/tools/instruments/0/vertices");
+}

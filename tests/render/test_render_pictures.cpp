@@ -232,3 +232,36 @@ TEST_F(RenderPictures, PlacedStitchesAndClosingTrianglesAreDrawn) {
     for (int x = 0; x < plain.width; ++x) darker += marked.pixel(x, yy)[1] + 20 < plain.pixel(x, yy)[1];
   EXPECT_GT(darker, 0);
 }
+
+// An instrument in front of the organ (a 6 mm box, active in frame 2 only, turned 45 degrees about the
+// view axis): drawn as grey steel where it is, nothing where it is inactive.
+TEST_F(RenderPictures, ActiveInstrumentsAreDrawnInSteel) {
+  const double y = -ctsurg::test::kSceneRadii[1] - 4.0;  // in front of the anterior surface
+  ctsurg::Trajectory t = trajectory;
+  ctsurg::TrajectoryInstrument box;
+  box.name = "box.stl";
+  for (int i = 0; i < 8; ++i) box.vertices.insert(box.vertices.end(), {(i & 1) ? 3.f : -3.f, (i & 2) ? 3.f : -3.f, (i & 4) ? 3.f : -3.f});
+  box.triangles = {0, 2, 1, 1, 2, 3, 4, 5, 6, 5, 7, 6, 0, 1, 4, 1, 5, 4, 2, 6, 3, 3, 6, 7, 0, 4, 2, 2, 4, 6, 1, 3, 5, 3, 7, 5};
+  t.instruments = {box};
+  const double c = std::cos(M_PI / 8), s = std::sin(M_PI / 8);  // 45 degrees about y (the anterior view's axis)
+  for (int f = 0; f < 3; ++f) t.instrument_poses.insert(t.instrument_poses.end(), {f == 2 ? 1.0 : 0.0, c, 0, s, 0, 0, y, 0});
+  EXPECT_TRUE(ctsurg::trajectory_scene_frame(t, 1).instrument_triangles.empty());
+  EXPECT_EQ(ctsurg::trajectory_scene_frame(t, 2).instrument_triangles.size(), 12u * 3 * 6);  // 12 faces, 3 corners, 6 floats
+  const ctsurg::RgbImage without = render_one(surface, &trajectory, 2), with = render_one(surface, &t, 2);
+  int64_t grey = 0, changed = 0;
+  for (int yy = 0; yy < with.height; ++yy)
+    for (int x = 0; x < with.width; ++x) {
+      const uint8_t* a = with.pixel(x, yy);
+      const uint8_t* b = without.pixel(x, yy);
+      if (std::abs(a[0] - b[0]) + std::abs(a[1] - b[1]) + std::abs(a[2] - b[2]) <= 12) continue;
+      ++changed;
+      // Steel: the three channels within a fifth of each other (the tissue is red: green far below red).
+      const int lo = std::min({a[0], a[1], a[2]}), hi = std::max({a[0], a[1], a[2]});
+      grey += hi > 40 && 5 * (hi - lo) < hi;
+    }
+  EXPECT_GT(grey, 100);
+  EXPECT_GE(grey, changed * 8 / 10) << changed << " pixels changed, " << grey << " grey";
+  // Inactive in frame 1: the picture is the one without it.
+  const ctsurg::RgbImage inactive = render_one(surface, &t, 1), plain = render_one(surface, &trajectory, 1);
+  EXPECT_EQ(inactive.rgb, plain.rgb);
+}
