@@ -5,14 +5,13 @@
 //                      the step's time with each tool, the contact's cost being the difference
 //   BM_PushOut         the contact pass alone over N particles spread through the instrument's box
 // bench/run.sh instruments writes the table in docs/benchmarks.md.
-#include "ctsurg/preprocess/image_file_reader.h"
-#include "ctsurg/preprocess/occupancy_downsampling.h"
 #include "ctsurg/sim/base/instrument.h"
 #include "ctsurg/sim/springs/instrument_contact.h"
 #include "ctsurg/sim/springs/sphere_tools.h"
 #include "ctsurg/sim/springs/spring_grid_model.h"
 #include "ctsurg/sim/springs/spring_mass_step.h"
 #include "ctsurg/sim/springs/stability.h"
+#include "heart_spring_model.h"
 
 #include <benchmark/benchmark.h>
 
@@ -45,20 +44,7 @@ void BM_Bake(benchmark::State& state) {
   state.counters["spacing_mm"] = ins->distance.spacing;
 }
 
-const SpringGridModel& heart_model() {
-  static const SpringGridModel model = [] {
-    const auto v = ctsurg::read_image_file(kSource / "data_samples" / "heart" / "heart_mask.nii.gz");
-    ctsurg::Volume<uint16_t> mask(v.geometry);
-    std::transform(v.voxels.begin(), v.voxels.end(), mask.voxels.begin(), [](float x) { return uint16_t(x > 0.5f); });
-    ctsurg::OccupancyDownsamplingOptions options;
-    options.cell_mm = 2.4;
-    SpringGridMaterial m;
-    m.face_stiffness = 7.2e4;
-    m.edge_stiffness = 3.6e4;
-    return build_spring_grid_model(ctsurg::downsample_occupancy(mask, options, {{1, "heart"}}), m);
-  }();
-  return model;
-}
+const SpringGridModel& heart_model() { return ctsurg::bench::heart_spring_model(); }
 
 // Tool 0: none; 1: the 5 mm sphere probe; 2 + k: instrument k. Each has its tip 3 mm behind the heart's
 // anterior surface at the middle of its x and z extent (the anterior-most particle near there), unturned

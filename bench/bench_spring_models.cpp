@@ -5,12 +5,11 @@
 // papers' 2.4 mm-cell scale (their pig heart had 42,745 particles), 1 and 2 threads. One iteration =
 // one step: spring forces gathered per particle, Verlet update, gravity, damping; no normals, no
 // spring damping (as the papers' table). bench/run.sh writes the table in docs/benchmarks.md.
-#include "ctsurg/preprocess/image_file_reader.h"
-#include "ctsurg/preprocess/occupancy_downsampling.h"
 #include "ctsurg/sim/springs/explicit_spring_model.h"
 #include "ctsurg/sim/springs/spring_grid_model.h"
 #include "ctsurg/sim/springs/spring_mass_step.h"
 #include "ctsurg/sim/springs/stability.h"
+#include "heart_spring_model.h"
 
 #include <benchmark/benchmark.h>
 
@@ -23,14 +22,7 @@ namespace {
 
 using namespace ctsurg::sim;
 
-const std::filesystem::path kHeart = std::filesystem::path(CTSURG_SOURCE_DIR) / "data_samples" / "heart";
-
-SpringGridMaterial material() {
-  SpringGridMaterial m;
-  m.face_stiffness = 7.2e4;  // ~ E h for E = 30 kPa (myocardium-like) and h = 2.4 mm, g/s^2
-  m.edge_stiffness = 3.6e4;
-  return m;
-}
+SpringGridMaterial material() { return ctsurg::bench::heart_spring_material(); }
 
 // A solid block of about `particles` cells, 2.4 mm cells.
 const SpringGridModel& block_model(int64_t particles) {
@@ -50,18 +42,7 @@ const SpringGridModel& block_model(int64_t particles) {
   return *slot;
 }
 
-// The heart mask's occupancy grid with 2.4 mm cells, as ctsurg-grid makes it.
-const SpringGridModel& heart_model() {
-  static const SpringGridModel model = [] {
-    const auto v = ctsurg::read_image_file(kHeart / "heart_mask.nii.gz");
-    ctsurg::Volume<uint16_t> mask(v.geometry);
-    std::transform(v.voxels.begin(), v.voxels.end(), mask.voxels.begin(), [](float x) { return uint16_t(x > 0.5f); });
-    ctsurg::OccupancyDownsamplingOptions options;
-    options.cell_mm = 2.4;
-    return build_spring_grid_model(ctsurg::downsample_occupancy(mask, options, {{1, "heart"}}), material());
-  }();
-  return model;
-}
+const SpringGridModel& heart_model() { return ctsurg::bench::heart_spring_model(); }
 
 template <class Model>
 void run(benchmark::State& state, const Model& model, int threads, int64_t springs) {

@@ -48,6 +48,16 @@ ctsurg::Trajectory three_frames(bool particles) {
   return t;
 }
 
+// Expects validate_trajectory to refuse `bad`, naming `field`.
+void refused(const ctsurg::Trajectory& bad, const std::string& field) {
+  try {
+    ctsurg::validate_trajectory(bad, "x.h5");
+    ADD_FAILURE() << "accepted a bad " << field;
+  } catch (const ctsurg::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find(field), std::string::npos) << e.what();
+  }
+}
+
 std::string read_text(const fs::path& p) {
   std::ifstream in(p);
   std::ostringstream s;
@@ -200,14 +210,6 @@ TEST(TrajectoryFile, StitchesAndClosingTrianglesRoundTripAndAreChecked) {
   const auto old = ctsurg::read_trajectory_file(dir.path() / "old.h5");
   EXPECT_EQ(old.stitch_count(), 0);
   EXPECT_TRUE(old.closing_triangles.empty());
-  const auto refused = [&](ctsurg::Trajectory bad, const std::string& field) {
-    try {
-      ctsurg::validate_trajectory(bad, "x.h5");
-      ADD_FAILURE() << "accepted a bad " << field;
-    } catch (const ctsurg::InputError& e) {
-      EXPECT_NE(std::string(e.what()).find(field), std::string::npos) << e.what();
-    }
-  };
   auto bad = t;
   bad.stitches.pop_back();
   refused(bad, "/trajectory/tools/stitches");
@@ -251,14 +253,6 @@ TEST(TrajectoryFile, InstrumentsRoundTripAndAreChecked) {
                 return dir.path() / "none.h5";
               }())
                   .instruments.empty());
-  const auto refused = [&](ctsurg::Trajectory bad, const std::string& field) {
-    try {
-      ctsurg::validate_trajectory(bad, "x.h5");
-      ADD_FAILURE() << "accepted a bad " << field;
-    } catch (const ctsurg::InputError& e) {
-      EXPECT_NE(std::string(e.what()).find(field), std::string::npos) << e.what();
-    }
-  };
   auto bad = t;
   bad.instrument_poses.pop_back();
   refused(bad, "/trajectory/tools/instrument_poses");

@@ -183,6 +183,23 @@ TEST_F(RenderPictures, MismatchedTrajectoryIsRefused) {
   }
 }
 
+// Of the pixels where `with` differs from `without` (by more than 12 summed over the channels; counted in
+// *changed), how many `is` accepts.
+template <class Predicate>
+int64_t changed_pixels(const ctsurg::RgbImage& with, const ctsurg::RgbImage& without, int64_t* changed, Predicate is) {
+  int64_t accepted = 0;
+  *changed = 0;
+  for (int y = 0; y < with.height; ++y)
+    for (int x = 0; x < with.width; ++x) {
+      const uint8_t* a = with.pixel(x, y);
+      const uint8_t* b = without.pixel(x, y);
+      if (std::abs(a[0] - b[0]) + std::abs(a[1] - b[1]) + std::abs(a[2] - b[2]) <= 12) continue;
+      ++*changed;
+      accepted += is(a) ? 1 : 0;
+    }
+  return accepted;
+}
+
 // Sutures and closed cuts in the picture of the cut frame: a placed stitch across the slit (in front of
 // the surface) is drawn as a violet cylinder, one not yet placed is not drawn; the triangles the
 // trajectory marks as closing the cut are drawn in the inside's dark red.
@@ -196,17 +213,10 @@ TEST_F(RenderPictures, PlacedStitchesAndClosingTrianglesAreDrawn) {
   EXPECT_TRUE(ctsurg::trajectory_scene_frame(t, 0).stitch_triangles.empty());
   EXPECT_EQ(ctsurg::trajectory_scene_frame(t, 2).stitch_triangles.size(), 8u * 6 * 6);  // 8 sides, 2 triangles, 6 floats a corner
   const ctsurg::RgbImage without = render_one(surface, &trajectory, 2), with = render_one(surface, &t, 2);
-  int64_t violet = 0, changed = 0;
-  for (int yy = 0; yy < with.height; ++yy)
-    for (int x = 0; x < with.width; ++x) {
-      const uint8_t* a = with.pixel(x, yy);
-      const uint8_t* b = without.pixel(x, yy);
-      if (std::abs(a[0] - b[0]) + std::abs(a[1] - b[1]) + std::abs(a[2] - b[2]) <= 12) continue;
-      ++changed;
-      // Violet, lit or shaded, blended or not at the cylinder's rim: blue over 0.6 of red (the tissue's
-      // is about 0.5, the slit's inside 0.2).
-      violet += 10 * a[2] > 6 * a[0] && a[2] > a[1];
-    }
+  int64_t changed = 0;
+  // Violet, lit or shaded, blended or not at the cylinder's rim: blue over 0.6 of red (the tissue's is
+  // about 0.5, the slit's inside 0.2).
+  const int64_t violet = changed_pixels(with, without, &changed, [](const uint8_t* a) { return 10 * a[2] > 6 * a[0] && a[2] > a[1]; });
   EXPECT_GT(violet, 10);
   EXPECT_GE(violet, changed * 9 / 10) << changed << " pixels changed, " << violet << " violet";
   // Move the rest topology's triangles facing the camera near the middle to its end and mark them as
@@ -248,17 +258,12 @@ TEST_F(RenderPictures, ActiveInstrumentsAreDrawnInSteel) {
   EXPECT_TRUE(ctsurg::trajectory_scene_frame(t, 1).instrument_triangles.empty());
   EXPECT_EQ(ctsurg::trajectory_scene_frame(t, 2).instrument_triangles.size(), 12u * 3 * 6);  // 12 faces, 3 corners, 6 floats
   const ctsurg::RgbImage without = render_one(surface, &trajectory, 2), with = render_one(surface, &t, 2);
-  int64_t grey = 0, changed = 0;
-  for (int yy = 0; yy < with.height; ++yy)
-    for (int x = 0; x < with.width; ++x) {
-      const uint8_t* a = with.pixel(x, yy);
-      const uint8_t* b = without.pixel(x, yy);
-      if (std::abs(a[0] - b[0]) + std::abs(a[1] - b[1]) + std::abs(a[2] - b[2]) <= 12) continue;
-      ++changed;
-      // Steel: the three channels within a fifth of each other (the tissue is red: green far below red).
-      const int lo = std::min({a[0], a[1], a[2]}), hi = std::max({a[0], a[1], a[2]});
-      grey += hi > 40 && 5 * (hi - lo) < hi;
-    }
+  int64_t changed = 0;
+  // Steel: the three channels within a fifth of each other (the tissue is red: green far below red).
+  const int64_t grey = changed_pixels(with, without, &changed, [](const uint8_t* a) {
+    const int lo = std::min({a[0], a[1], a[2]}), hi = std::max({a[0], a[1], a[2]});
+    return hi > 40 && 5 * (hi - lo) < hi;
+  });
   EXPECT_GT(grey, 100);
   EXPECT_GE(grey, changed * 8 / 10) << changed << " pixels changed, " << grey << " grey";
   // Inactive in frame 1: the picture is the one without it.

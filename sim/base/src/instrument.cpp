@@ -165,4 +165,10 @@ InstrumentView instrument_view(const Instrument& instrument, const Quaternion& q
   return v;
 }
 
+void check_instrument_view(const InstrumentView& view, const std::string& where, const std::string& field) {
+  if (view.phi == nullptr || view.nx < 2 || view.ny < 2 || view.nz < 2 || !(view.spacing > 0)) {
+    throw InputError(where, field, "the instrument's distance grid is empty");
+  }
+}
+
 }  // namespace ctsurg::sim

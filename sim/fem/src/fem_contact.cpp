@@ -122,6 +122,21 @@ void FemContact::detect(const std::vector<double>& x, std::vector<Pair>& pairs) 
   }
 }
 
+bool FemContact::constraint(const std::vector<double>& x, const Pair& p, std::array<double, 3>& n, double& C) const {
+  const uint32_t* f = &faces_[3 * static_cast<size_t>(p.face)];
+  n = face_normal(x, f);
+  const double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+  if (!(len > 0)) return false;  // a degenerate face: no normal, no constraint
+  for (double& c : n) c /= len;
+  C = 0;
+  for (size_t a = 0; a < 3; ++a) {
+    double q = 0;
+    for (size_t k = 0; k < 3; ++k) q += p.b[k] * x[3 * static_cast<size_t>(f[k]) + a];
+    C += (x[3 * static_cast<size_t>(p.node) + a] - q) * n[a];
+  }
+  return true;
+}
+
 int64_t FemContact::resolve(const FemModel& model, Real* u, const Real* inv_mass) {
   const size_t n3 = model.nodes.size();
   std::vector<double>& x = scratch_;
@@ -133,20 +148,14 @@ int64_t FemContact::resolve(const FemModel& model, Real* u, const Real* inv_mass
   since_detection_ = (since_detection_ + 1) % options_.interval_steps;
   const std::vector<Pair>& pairs = pairs_;
   if (pairs.empty()) return 0;
-  std::vector<uint8_t> moved(n3 / 3, 0);
+  std::vector<uint8_t>& moved = moved_;
+  moved.assign(n3 / 3, 0);
   for (int it = 0; it < options_.iterations; ++it) {
     for (const Pair& p : pairs) {
       const uint32_t* f = &faces_[3 * static_cast<size_t>(p.face)];
-      auto n = face_normal(x, f);
-      const double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
-      if (!(len > 0)) continue;
-      for (double& c : n) c /= len;
-      double q[3] = {0, 0, 0};
-      for (int k = 0; k < 3; ++k)
-        for (int a = 0; a < 3; ++a) q[a] += p.b[k] * x[3 * static_cast<size_t>(f[k]) + static_cast<size_t>(a)];
-      const double* xv = &x[3 * static_cast<size_t>(p.node)];
-      const double C = (xv[0] - q[0]) * n[0] + (xv[1] - q[1]) * n[1] + (xv[2] - q[2]) * n[2];
-      if (C >= 0) continue;
+      std::array<double, 3> n;
+      double C = 0;
+      if (!constraint(x, p, n, C) || C >= 0) continue;
       const double wv = inv_mass[p.node];
       double w = wv;
       for (int k = 0; k < 3; ++k) w += p.b[k] * p.b[k] * inv_mass[f[k]];
@@ -175,17 +184,9 @@ double FemContact::deepest_penetration(const FemModel& model, const Real* u) con
   detect(x, pairs);
   double deepest = 0;
   for (const Pair& p : pairs) {
-    const uint32_t* f = &faces_[3 * static_cast<size_t>(p.face)];
-    auto n = face_normal(x, f);
-    const double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
-    if (!(len > 0)) continue;
+    std::array<double, 3> n;
     double C = 0;
-    for (int a = 0; a < 3; ++a) {
-      double q = 0;
-      for (int k = 0; k < 3; ++k) q += p.b[k] * x[3 * static_cast<size_t>(f[k]) + static_cast<size_t>(a)];
-      C += (x[3 * static_cast<size_t>(p.node) + static_cast<size_t>(a)] - q) * n[static_cast<size_t>(a)] / len;
-    }
-    deepest = std::max(deepest, -C);
+    if (constraint(x, p, n, C)) deepest = std::max(deepest, -C);
   }
   return deepest;
 }

@@ -31,26 +31,39 @@ std::vector<uint8_t> fixed_flags(int32_t nodes, const FemBoundaryConditions& sup
   return flags;
 }
 
-// For each surface vertex of `coupling` (slots 0..3: the corners of a linear tet, weights: barycentric),
-// the quadratic element with those corners and its 10 shape-function values there.
-void quadratic_surface(const FemModel& model, const SurfaceCoupling& coupling, std::vector<int32_t>& nodes, std::vector<double>& weights) {
+// For each surface vertex of `coupling` (slots 0..3: the corners of a tet, as tet_embedding.h ties them),
+// the element whose corners those are (#V). InputError(where, "surface", ...) for a vertex tied to no tet.
+std::vector<int32_t> surface_elements(const FemModel& model, const SurfaceCoupling& coupling, const std::string& where) {
+  const size_t npe = static_cast<size_t>(model.nodes_per_element());
   std::map<std::array<int32_t, 4>, int32_t> element_of;
   for (int32_t e = 0; e < model.tet_count(); ++e) {
     std::array<int32_t, 4> key;
-    for (int a = 0; a < 4; ++a) key[a] = model.tets[10 * static_cast<size_t>(e) + a];
+    for (size_t a = 0; a < 4; ++a) key[a] = model.tets[npe * static_cast<size_t>(e) + a];
     std::sort(key.begin(), key.end());
     element_of.emplace(key, e);
   }
   const int64_t nv = coupling.vertex_count();
+  std::vector<int32_t> elements(static_cast<size_t>(nv));
+  for (int64_t v = 0; v < nv; ++v) {
+    std::array<int32_t, 4> key;
+    for (size_t a = 0; a < 4; ++a) key[a] = coupling.particles[8 * static_cast<size_t>(v) + a];
+    std::sort(key.begin(), key.end());
+    const auto it = element_of.find(key);
+    if (it == element_of.end()) throw InputError(where, "surface", "vertex " + std::to_string(v) + " is not tied to a tet of the model");
+    elements[static_cast<size_t>(v)] = it->second;
+  }
+  return elements;
+}
+
+// For each surface vertex of `coupling` (slots 0..3: the corners of a linear tet, weights: barycentric),
+// the quadratic element with those corners and its 10 shape-function values there.
+void quadratic_surface(const FemModel& model, const SurfaceCoupling& coupling, std::vector<int32_t>& nodes, std::vector<double>& weights) {
+  const std::vector<int32_t> element = surface_elements(model, coupling, "fem engine");
+  const int64_t nv = coupling.vertex_count();
   nodes.resize(10 * static_cast<size_t>(nv));
   weights.resize(10 * static_cast<size_t>(nv));
   for (int64_t v = 0; v < nv; ++v) {
-    std::array<int32_t, 4> key;
-    for (int a = 0; a < 4; ++a) key[a] = coupling.particles[8 * static_cast<size_t>(v) + a];
-    std::sort(key.begin(), key.end());
-    const auto it = element_of.find(key);
-    if (it == element_of.end()) throw InputError("fem engine", "surface", "vertex " + std::to_string(v) + " is not tied to a tet of the model");
-    const int32_t* t = &model.tets[10 * static_cast<size_t>(it->second)];
+    const int32_t* t = &model.tets[10 * static_cast<size_t>(element[static_cast<size_t>(v)])];
     double l[4] = {0, 0, 0, 0};
     for (int a = 0; a < 4; ++a)
       for (int k = 0; k < 4; ++k)
@@ -181,29 +194,14 @@ void FemEngine::apply_cuts(const std::vector<ToolInput>& tools) {
     if (!surface_.empty()) {
       // Each surface vertex's tet and which of its corners each tie is: after a split, the vertex
       // follows the copies its own tet uses.
-      std::map<std::array<int32_t, 4>, int32_t> element_of;
-      for (int32_t e = 0; e < model_.tet_count(); ++e) {
-        std::array<int32_t, 4> key;
-        for (int a = 0; a < 4; ++a) key[static_cast<size_t>(a)] = model_.tets[4 * static_cast<size_t>(e) + static_cast<size_t>(a)];
-        std::sort(key.begin(), key.end());
-        element_of.emplace(key, e);
-      }
       const SurfaceCoupling& c = surface_.coupling();
-      const int64_t nv = c.vertex_count();
-      surface_element_.assign(static_cast<size_t>(nv), -1);
-      surface_corner_.assign(8 * static_cast<size_t>(nv), -1);
-      for (int64_t v = 0; v < nv; ++v) {
-        std::array<int32_t, 4> key;
-        for (int k = 0; k < 4; ++k) key[static_cast<size_t>(k)] = c.particles[8 * static_cast<size_t>(v) + static_cast<size_t>(k)];
-        std::sort(key.begin(), key.end());
-        const auto it = element_of.find(key);
-        if (it == element_of.end()) throw InputError(options_.where, "surface", "vertex " + std::to_string(v) + " is not tied to a tet");
-        surface_element_[static_cast<size_t>(v)] = it->second;
-        for (int k = 0; k < 4; ++k)
+      surface_element_ = surface_elements(model_, c, options_.where);
+      surface_corner_.assign(8 * surface_element_.size(), -1);
+      for (size_t v = 0; v < surface_element_.size(); ++v)
+        for (size_t k = 0; k < 4; ++k)
           for (int a = 0; a < 4; ++a)
-            if (model_.tets[4 * static_cast<size_t>(it->second) + static_cast<size_t>(a)] == c.particles[8 * static_cast<size_t>(v) + static_cast<size_t>(k)])
-              surface_corner_[8 * static_cast<size_t>(v) + static_cast<size_t>(k)] = a;
-      }
+            if (model_.tets[4 * static_cast<size_t>(surface_element_[v]) + static_cast<size_t>(a)] == c.particles[8 * v + k])
+              surface_corner_[8 * v + k] = a;
     }
   }
   sync();
@@ -242,17 +240,19 @@ void FemEngine::split_nodes(const std::vector<int32_t>& tets, const std::vector<
   extend(nodes);
   FemModel m = build_fem_model(nodes, tets, model_.material);
   m.frame_origin = model_.frame_origin;
+  // A copy is held as its parent is: whole (fixed_nodes) or in single components (fixed_components).
   std::vector<uint8_t> fixed = fixed_flags(n0, supports_);
+  std::vector<uint8_t> whole(static_cast<size_t>(n0), 0), component(3 * static_cast<size_t>(n0), 0);
+  for (const int32_t n : supports_.fixed_nodes) whole[static_cast<size_t>(n)] = 1;
+  for (const int32_t c : supports_.fixed_components) component[static_cast<size_t>(c)] = 1;
   for (size_t k = 0; k < parents.size(); ++k) {
     const int32_t id = n0 + static_cast<int32_t>(k), p = parents[k];
     fixed.push_back(fixed[static_cast<size_t>(p)]);
-    if (std::binary_search(supports_.fixed_nodes.begin(), supports_.fixed_nodes.end(), p) ||
-        std::find(supports_.fixed_nodes.begin(), supports_.fixed_nodes.end(), p) != supports_.fixed_nodes.end()) {
-      supports_.fixed_nodes.push_back(id);
-    }
+    whole.push_back(whole[static_cast<size_t>(p)]);
+    if (whole[static_cast<size_t>(p)]) supports_.fixed_nodes.push_back(id);
     for (int a = 0; a < 3; ++a) {
-      if (std::find(supports_.fixed_components.begin(), supports_.fixed_components.end(), 3 * p + a) != supports_.fixed_components.end())
-        supports_.fixed_components.push_back(3 * id + a);
+      component.push_back(component[3 * static_cast<size_t>(p) + static_cast<size_t>(a)]);
+      if (component[3 * static_cast<size_t>(p) + static_cast<size_t>(a)]) supports_.fixed_components.push_back(3 * id + a);
     }
   }
   if (options_.solver == FemSolver::static_equilibrium) {

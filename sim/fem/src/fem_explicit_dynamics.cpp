@@ -218,11 +218,7 @@ void FemExplicitDynamics::set_contact_instruments(const std::vector<InstrumentVi
   if (device_ && !instruments.empty()) {
     throw InputError(kWhere, "instruments", "instrument contact runs on the cpu backend only; set backend: cpu");
   }
-  for (const InstrumentView& v : instruments) {
-    if (v.phi == nullptr || v.nx < 2 || v.ny < 2 || v.nz < 2 || !(v.spacing > 0)) {
-      throw InputError(kWhere, "instruments", "an instrument's distance grid is empty");
-    }
-  }
+  for (const InstrumentView& v : instruments) check_instrument_view(v, kWhere, "instruments");
   instruments_ = instruments;
 }
 

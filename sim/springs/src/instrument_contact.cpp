@@ -3,16 +3,13 @@
 #include "ctsurg/sim/base/kernels/instrument_contact_impl.h"
 #include "spring_cpu_kernels.h"
 
-#include "ctsurg/core/error.h"
 
 #include <algorithm>
 
 namespace ctsurg::sim {
 
 int64_t push_out_of_instrument(ParticleState& state, const InstrumentView& view, int threads) {
-  if (view.phi == nullptr || view.nx < 2 || view.ny < 2 || view.nz < 2 || !(view.spacing > 0)) {
-    throw InputError("instrument", "distance", "the instrument's distance grid is empty");
-  }
+  check_instrument_view(view, "instrument", "distance");
   return cpu::push_out(state.x.data(), state.y.data(), state.z.data(), state.inv_mass.data(), state.count(), view, threads);
 }
 

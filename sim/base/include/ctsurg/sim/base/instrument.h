@@ -64,4 +64,8 @@ std::shared_ptr<const Instrument> load_instrument(const std::filesystem::path& p
 // frame); `instrument` must outlive the view.
 InstrumentView instrument_view(const Instrument& instrument, const Quaternion& q, const std::array<double, 3>& centre);
 
+// InputError(where, field, ...) unless `view` has a distance grid (at least 2 nodes an axis, spacing > 0):
+// the dispatchers' check before a kernel reads it.
+void check_instrument_view(const InstrumentView& view, const std::string& where, const std::string& field);
+
 }  // namespace ctsurg::sim

@@ -32,6 +32,7 @@
 #include "ctsurg/sim/base/real.h"
 #include "ctsurg/sim/fem/fem_model.h"
 
+#include <array>
 #include <cstdint>
 #include <vector>
 
@@ -73,6 +74,9 @@ class FemContact {
     double b[3];
   };
   void detect(const std::vector<double>& x, std::vector<Pair>& pairs) const;
+  // The pair's constraint at positions x: the face's unit normal n and C = (x_node - q) . n (q: the point
+  // of barycentric coordinates p.b); false for a degenerate face.
+  bool constraint(const std::vector<double>& x, const Pair& p, std::array<double, 3>& n, double& C) const;
 
   FemContactOptions options_;
   double distance_ = 0;                // mm: the detection distance
@@ -88,6 +92,7 @@ class FemContact {
   std::vector<Pair> pairs_;            // found at the last detection
   int since_detection_ = 0;
   std::vector<double> scratch_;        // positions
+  std::vector<uint8_t> moved_;         // per node: moved by the last resolve
 };
 
 // Separates the bodies of a tet mesh before a run: each tet's region is its label (by_label) and the
