@@ -3,5 +3,14 @@ function(ctsurg_add_tool name source library)
   add_executable(${name} ${source})
   target_link_libraries(${name} PRIVATE ${library})
   ctsurg_target_warnings(${name})
+  ctsurg_driver_optimization(${name})
   install(TARGETS ${name} RUNTIME DESTINATION bin)
+endfunction()
+
+# ctsurg_driver_optimization(<target>): CTSURG_DRIVER_OPTIMIZATION (e.g. -O0) for a test program or a tool
+# main; it comes after the build type's flags, so it wins. The libraries keep the build type's level.
+function(ctsurg_driver_optimization target)
+  if(CTSURG_DRIVER_OPTIMIZATION)
+    target_compile_options(${target} PRIVATE $<$<COMPILE_LANGUAGE:CXX>:${CTSURG_DRIVER_OPTIMIZATION}>)
+  endif()
 endfunction()
