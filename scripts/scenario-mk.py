@@ -89,10 +89,11 @@ def main():
     renders = d.get("render", [])
     others = None
     for r in renders:
+        # Without model.surface an FEM trajectory carries its tet mesh's boundary, which ctsurg-render draws.
         surface = inputs.get("surface")
-        if not surface:
+        if not surface and d.get("model") != "fem":
             fail(f"{a.scenario}: render '{r['name']}' needs model.surface (a surface to draw)")
-        pre = [traj, surface]
+        pre = [traj] + ([surface] if surface else [])
         ref_opt = ""
         ref = r.get("reference") or ""
         if ref and ref != "rest":
@@ -115,7 +116,8 @@ def main():
             ref_opt = f" --reference {q(ref_path)}"
         frames = str(r.get("frames", "last"))
         multi = frames == "all" or any(c in frames for c in MULTI)
-        common = (f"--surface {q(surface)} --trajectory {q(traj)} --layout {q(r['layout'])} --frames {q(frames)} "
+        surface_opt = f"--surface {q(surface)} " if surface else ""
+        common = (f"{surface_opt}--trajectory {q(traj)} --layout {q(r['layout'])} --frames {q(frames)} "
                   f"--view {q(r['view'])} --size {int(r['size'])}{ref_opt} $({key}.RENDER_ARGS)")
         if multi:
             target = f"{out}/{r['name']}.frames"

@@ -16,6 +16,7 @@
 #include "ctsurg/core/trajectory_file.h"
 #include "ctsurg/render/animation_export.h"
 #include "ctsurg/render/render_pictures.h"
+#include "ctsurg/render/trajectory_surface.h"
 
 namespace fs = std::filesystem;
 
@@ -66,7 +67,9 @@ int main(int argc, char** argv) {
       "overlay against the rest surface or another model, or a heat map of the displacement (or the difference from "
       "another model) with a colour bar in mm. Deterministic: the same input gives the same pixels.",
       [&](CLI::App& app) {
-        app.add_option("--surface,-s", surface_path, "Surface file (.h5), e.g. surface_textured.h5")->required();
+        app.add_option("--surface,-s", surface_path,
+                       "Surface file (.h5), e.g. surface_textured.h5; optional for a trajectory simulated without one "
+                       "(an FEM model drawn by its tet mesh's boundary)");
         app.add_option("--trajectory,-t", trajectory_path, "Trajectory file (.h5) simulated on that surface");
         app.add_option("--output,-o", output,
                        "PNG to write; with several pictures it must contain {} (replaced by the frame number, "
@@ -143,18 +146,21 @@ int main(int argc, char** argv) {
         if (!animation.empty()) ctsurg::check_animation_output(animation);
 
         // Inputs.
-        const ctsurg::SurfaceMesh surface = ctsurg::read_surface_mesh_file(surface_path);
         std::optional<ctsurg::Trajectory> trajectory;
         if (!trajectory_path.empty()) trajectory = ctsurg::read_trajectory_file(trajectory_path);
+        if (surface_path.empty() && !trajectory) throw ctsurg::InputError("--surface", "", "give a surface file, or a trajectory that has its own surface");
+        const ctsurg::SurfaceMesh surface = surface_path.empty() ? ctsurg::trajectory_surface(*trajectory, trajectory_path)
+                                                                 : ctsurg::read_surface_mesh_file(surface_path);
+        if (surface_path.empty()) surface_path = trajectory_path;  // names the model in captions and errors
         ctsurg::RenderModel model{&surface, surface_path, trajectory ? &*trajectory : nullptr, trajectory_path};
         if (trajectory) {
-          check_same_surface(*trajectory, trajectory_path, surface_path);
+          if (surface_path != trajectory_path) check_same_surface(*trajectory, trajectory_path, surface_path);
           ctsurg::check_trajectory_matches_surface(*trajectory, trajectory_path, surface, surface_path);
           request.frames = ctsurg::parse_frames(frames_spec.empty() ? "last" : frames_spec, trajectory->frame_count());
         } else if (!frames_spec.empty() && frames_spec != "rest") {
           throw ctsurg::InputError("--frames", "", "'" + frames_spec + "' needs --trajectory; without one only the rest surface is drawn");
         }
-        if (request.style.normal_map && surface.normal_map.empty()) {
+        if (request.style.normal_map && surface.normal_map.empty() && surface_path != trajectory_path) {
           spdlog::warn("{} has no normal map (/surface/normal_map): shading with its normals only (run ctsurg-normalmap "
                        "for the detail)", surface_path);
         }

@@ -36,38 +36,25 @@ FemContact::FemContact(const FemModel& model, const FemContactOptions& options) 
   if (options.iterations < 1 || options.iterations > 100) throw InputError(kWhere, "iterations", "must be 1 .. 100");
   if (options.interval_steps < 1 || options.interval_steps > 1000) throw InputError(kWhere, "interval_steps", "must be 1 .. 1000");
   if (!(std::isfinite(options.distance_mm) && options.distance_mm >= 0)) throw InputError(kWhere, "distance_mm", "must be finite and >= 0");
-  const int32_t nt = model.tet_count(), nn = model.node_count();
-  std::map<std::array<int32_t, 3>, int> count;
-  for (int32_t e = 0; e < nt; ++e)
-    for (const auto& f : kOutwardFaces) {
-      std::array<int32_t, 3> key{};
-      for (int k = 0; k < 3; ++k) key[static_cast<size_t>(k)] = model.tets[4 * static_cast<size_t>(e) + static_cast<size_t>(f[k])];
-      std::sort(key.begin(), key.end());
-      ++count[key];
-    }
+  const int32_t nn = model.node_count();
   std::vector<int32_t> body;
   bodies_ = fem_mesh_pieces(model.tets, nn, body);
   on_boundary_.assign(static_cast<size_t>(nn), 0);
   node_body_.assign(static_cast<size_t>(nn), 0);
   for (int32_t n = 0; n < nn; ++n) node_body_[static_cast<size_t>(n)] = static_cast<uint32_t>(std::max(body[static_cast<size_t>(n)], 0));
+  faces_ = fem_boundary_faces(model.tets);
   double edge_sum = 0;
   int64_t edges = 0;
-  for (int32_t e = 0; e < nt; ++e)
-    for (const auto& f : kOutwardFaces) {
-      std::array<int32_t, 3> key{}, wound{};
-      for (int k = 0; k < 3; ++k) wound[static_cast<size_t>(k)] = key[static_cast<size_t>(k)] = model.tets[4 * static_cast<size_t>(e) + static_cast<size_t>(f[k])];
-      std::sort(key.begin(), key.end());
-      if (count[key] != 1) continue;
-      for (int k = 0; k < 3; ++k) {
-        faces_.push_back(static_cast<uint32_t>(wound[static_cast<size_t>(k)]));
-        on_boundary_[static_cast<size_t>(wound[static_cast<size_t>(k)])] = 1;
-        const double* p = &model.nodes[3 * static_cast<size_t>(wound[static_cast<size_t>(k)])];
-        const double* q = &model.nodes[3 * static_cast<size_t>(wound[static_cast<size_t>((k + 1) % 3)])];
-        edge_sum += std::sqrt((p[0] - q[0]) * (p[0] - q[0]) + (p[1] - q[1]) * (p[1] - q[1]) + (p[2] - q[2]) * (p[2] - q[2]));
-        ++edges;
-      }
-      face_body_.push_back(node_body_[static_cast<size_t>(wound[0])]);
+  for (size_t f = 0; f < faces_.size(); f += 3) {
+    for (size_t k = 0; k < 3; ++k) {
+      on_boundary_[faces_[f + k]] = 1;
+      const double* p = &model.nodes[3 * static_cast<size_t>(faces_[f + k])];
+      const double* q = &model.nodes[3 * static_cast<size_t>(faces_[f + (k + 1) % 3])];
+      edge_sum += std::sqrt((p[0] - q[0]) * (p[0] - q[0]) + (p[1] - q[1]) * (p[1] - q[1]) + (p[2] - q[2]) * (p[2] - q[2]));
+      ++edges;
     }
+    face_body_.push_back(node_body_[faces_[f]]);
+  }
   // Detection within a tenth of an element: found every step, a penetration is far shallower.
   distance_ = options.distance_mm > 0 ? options.distance_mm : (edges ? 0.1 * edge_sum / static_cast<double>(edges) : 0.1);
   std::vector<int32_t> compact(static_cast<size_t>(nn), -1);
@@ -79,17 +66,19 @@ FemContact::FemContact(const FemModel& model, const FemContactOptions& options) 
   }
   compact_faces_.resize(faces_.size());
   for (size_t i = 0; i < faces_.size(); ++i) compact_faces_[i] = static_cast<uint32_t>(compact[faces_[i]]);
-  std::vector<std::pair<int32_t, int32_t>> node_face;
   for (size_t f = 0; f < faces_.size() / 3; ++f)
-    for (int k = 0; k < 3; ++k) node_face.emplace_back(static_cast<int32_t>(faces_[3 * f + static_cast<size_t>(k)]), static_cast<int32_t>(f));
-  build_csr(nn, node_face, node_faces_offsets_, node_faces_);
+    for (int k = 0; k < 3; ++k) {
+      const uint32_t a = faces_[3 * f + static_cast<size_t>(k)], b = faces_[3 * f + static_cast<size_t>((k + 1) % 3)];
+      edge_faces_.push_back({{std::min(a, b), std::max(a, b)}, static_cast<uint32_t>(f)});
+    }
+  std::sort(edge_faces_.begin(), edge_faces_.end());
 }
 
 void FemContact::detect(const std::vector<double>& x, std::vector<Pair>& pairs) const {
   pairs.clear();
   if (faces_.empty()) return;
-  // The boundary nodes only (the faces' corners), compacted: the hash sees the surface, not the volume.
-  const size_t nb = boundary_nodes_.size();
+  // The hash runs on the boundary nodes only (compacted): interior nodes can neither touch nor be touched.
+  const size_t nb = boundary_nodes_.size(), nf = faces_.size() / 3;
   std::vector<double> bx(3 * nb);
   for (size_t k = 0; k < nb; ++k)
     for (size_t a = 0; a < 3; ++a) bx[3 * k + a] = x[3 * static_cast<size_t>(boundary_nodes_[k]) + a];
@@ -97,26 +86,77 @@ void FemContact::detect(const std::vector<double>& x, std::vector<Pair>& pairs) 
   o.pairs = options_.self ? ContactPairs::all : ContactPairs::between_objects;
   o.threads = options_.threads;
   const std::vector<VertexTriangleContact> near = vertex_triangle_contacts(bx, compact_faces_, boundary_body_, face_body_, distance_, o);
+  if (near.empty()) return;
+  // Unit face normals and angle-weighted vertex pseudo-normals (Baerentzen & Aanaes 2005) of the surfaces now.
+  std::vector<double> fn(3 * nf), vn(x.size(), 0.0);
+  for (size_t f = 0; f < nf; ++f) {
+    const uint32_t* c = &faces_[3 * f];
+    auto n = face_normal(x, c);
+    const double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    if (!(len > 0)) continue;
+    for (size_t a = 0; a < 3; ++a) fn[3 * f + a] = n[a] / len;
+    for (int k = 0; k < 3; ++k) {
+      const double* p = &x[3 * static_cast<size_t>(c[k])];
+      const double* q = &x[3 * static_cast<size_t>(c[(k + 1) % 3])];
+      const double* r = &x[3 * static_cast<size_t>(c[(k + 2) % 3])];
+      const double u[3] = {q[0] - p[0], q[1] - p[1], q[2] - p[2]}, v[3] = {r[0] - p[0], r[1] - p[1], r[2] - p[2]};
+      const double lu = std::sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]), lv = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+      if (!(lu > 0 && lv > 0)) continue;
+      const double angle = std::acos(std::clamp((u[0] * v[0] + u[1] * v[1] + u[2] * v[2]) / (lu * lv), -1.0, 1.0));
+      for (size_t a = 0; a < 3; ++a) vn[3 * static_cast<size_t>(c[k]) + a] += angle * fn[3 * f + a];
+    }
+  }
+  // The pseudo-normal of the feature of face f nearest the node (its interior, an edge or a corner): the
+  // sign of (x - q) . N says inside or outside the closed surface, which the face's own plane does not
+  // say when q is on its border (a node beside a convex edge is behind the plane yet outside).
+  const auto feature_normal = [&](const VertexTriangleContact& c) {
+    constexpr double kOnBorder = 1e-9;
+    const uint32_t* f = &faces_[3 * static_cast<size_t>(c.triangle)];
+    int inside = 0, last = 0;
+    for (int k = 0; k < 3; ++k)
+      if (c.barycentric[k] > kOnBorder) ++inside, last = k;
+    std::array<double, 3> n{fn[3 * c.triangle], fn[3 * c.triangle + 1], fn[3 * c.triangle + 2]};
+    if (inside == 1) {
+      for (size_t a = 0; a < 3; ++a) n[a] = vn[3 * static_cast<size_t>(f[last]) + a];
+    } else if (inside == 2) {
+      uint32_t e0 = 0, e1 = 0;
+      for (int k = 0, m = 0; k < 3; ++k)
+        if (c.barycentric[k] > kOnBorder) (m++ == 0 ? e0 : e1) = f[k];
+      const auto key = std::make_pair(std::min(e0, e1), std::max(e0, e1));
+      auto it = std::lower_bound(edge_faces_.begin(), edge_faces_.end(), std::make_pair(key, uint32_t{0}));
+      n = {0, 0, 0};
+      for (; it != edge_faces_.end() && it->first == key; ++it)
+        for (size_t a = 0; a < 3; ++a) n[a] += fn[3 * it->second + a];
+    }
+    return n;
+  };
   for (size_t i = 0; i < near.size();) {
     const uint32_t k = near[i].vertex, v = boundary_nodes_[k];
     size_t j = i;
     while (j < near.size() && near[j].vertex == k) ++j;
-    std::array<double, 3> nv{0, 0, 0};
-    for (int32_t q = node_faces_offsets_[v]; q < node_faces_offsets_[v + 1]; ++q) {
-      const auto n = face_normal(x, &faces_[3 * static_cast<size_t>(node_faces_[static_cast<size_t>(q)])]);
-      for (int a = 0; a < 3; ++a) nv[static_cast<size_t>(a)] += n[static_cast<size_t>(a)];
+    const double* xv = &x[3 * static_cast<size_t>(v)];
+    // Another body: its face nearest the node decides (inside when behind that feature's pseudo-normal),
+    // so a node on the surface of a convex neighbour is not taken for a penetrating one.
+    const VertexTriangleContact* other = nullptr;
+    for (size_t c = i; c < j; ++c)
+      if (face_body_[near[c].triangle] != boundary_body_[k] && (!other || near[c].distance < other->distance)) other = &near[c];
+    if (other) {
+      const auto n = feature_normal(*other);
+      const double d = (xv[0] - other->closest[0]) * n[0] + (xv[1] - other->closest[1]) * n[1] + (xv[2] - other->closest[2]) * n[2];
+      if (!(d < 0)) other = nullptr;
     }
-    // The nearest face it is behind: of another body, or of its own body facing it (proximity to one's
-    // own surface where it curves is not contact).
-    const VertexTriangleContact* best = nullptr;
-    for (size_t c = i; c < j; ++c) {
-      if (!(near[c].signed_distance < 0)) continue;
-      if (face_body_[near[c].triangle] == boundary_body_[k]) {
-        const auto nf = face_normal(x, &faces_[3 * static_cast<size_t>(near[c].triangle)]);
-        if (nv[0] * nf[0] + nv[1] * nf[1] + nv[2] * nf[2] >= 0) continue;
+    // Its own body (self-contact): a face behind which it lies, facing it (n_v . n < 0), the nearest.
+    const VertexTriangleContact* own = nullptr;
+    if (options_.self) {
+      std::array<double, 3> nv{vn[3 * static_cast<size_t>(v)], vn[3 * static_cast<size_t>(v) + 1], vn[3 * static_cast<size_t>(v) + 2]};
+      for (size_t c = i; c < j; ++c) {
+        if (face_body_[near[c].triangle] != boundary_body_[k] || !(near[c].signed_distance < 0)) continue;
+        const double* nface = &fn[3 * near[c].triangle];
+        if (nv[0] * nface[0] + nv[1] * nface[1] + nv[2] * nface[2] >= 0) continue;
+        if (!own || near[c].distance < own->distance) own = &near[c];
       }
-      if (!best || near[c].distance < best->distance) best = &near[c];
     }
+    const VertexTriangleContact* best = other && (!own || other->distance <= own->distance) ? other : own;
     if (best) pairs.push_back({v, best->triangle, {best->barycentric[0], best->barycentric[1], best->barycentric[2]}});
     i = j;
   }

@@ -106,10 +106,23 @@ FemEngine::FemEngine(FemModel model, FemBoundaryConditions supports, EmbeddedSur
     throw InputError(options_.where, "contact", "contact needs solver: dynamic (it is part of the explicit dynamics)");
   }
   make_solvers();
+  if (options_.contact.enabled) {
+    std::vector<int32_t> piece;
+    bodies_ = fem_mesh_pieces(model_.tets, model_.node_count(), piece);
+    element_body_.resize(static_cast<size_t>(model_.tet_count()));
+    for (size_t e = 0; e < element_body_.size(); ++e) element_body_[e] = piece[static_cast<size_t>(model_.tets[static_cast<size_t>(model_.nodes_per_element()) * e])];
+  }
 }
 
 // The solver for options_.solver on model_ and supports_ (at the start, and again after a cut split nodes).
 void FemEngine::make_solvers() {
+  if (surface_.empty()) {
+    const size_t npe = static_cast<size_t>(model_.nodes_per_element());
+    std::vector<int32_t> corners;
+    corners.reserve(4 * static_cast<size_t>(model_.tet_count()));
+    for (size_t e = 0; e < model_.tets.size(); e += npe) corners.insert(corners.end(), model_.tets.begin() + static_cast<std::ptrdiff_t>(e), model_.tets.begin() + static_cast<std::ptrdiff_t>(e + 4));
+    boundary_triangles_ = fem_boundary_faces(corners);
+  }
   if (options_.solver == FemSolver::dynamic) {
     FemDynamicsOptions o;  // the explicit dynamics' own options struct: every field it needs, from ours
     o.dt = options_.dt;
@@ -323,8 +336,19 @@ void FemEngine::split_nodes(const std::vector<int32_t>& tets, const std::vector<
   }
 }
 
+namespace {
+constexpr int32_t kMaxBodyMetrics = 16;
+}
+
 std::vector<std::pair<std::string, std::string>> FemEngine::extra_metrics() const {
-  return {{"newton_iterations", "1"}, {"cg_iterations", "1"}, {"element_volume", "mm^3"}, {"nodes", "1"}};
+  std::vector<std::pair<std::string, std::string>> names{{"newton_iterations", "1"}, {"cg_iterations", "1"}, {"element_volume", "mm^3"}, {"nodes", "1"}};
+  // With contact: the deepest penetration between the surfaces (fem_contact.h) and each body's element
+  // volume (up to 16 bodies).
+  if (options_.contact.enabled) {
+    names.emplace_back("contact_penetration", "mm");
+    for (int32_t b = 0; b < std::min(bodies_, kMaxBodyMetrics); ++b) names.emplace_back("body_volume_" + std::to_string(b), "mm^3");
+  }
+  return names;
 }
 
 double FemEngine::dt() const { return dynamics_ ? dynamics_->dt() : implicit_ ? implicit_->dt() : 0.0; }
@@ -505,6 +529,7 @@ EngineMetrics FemEngine::metrics() const {
   // The elements' deformed volume (of their corner tets: exact for linear tets; the tissue's volume
   // whatever a cut did to the surface) and the node count (a cut adds nodes).
   double volume = 0;
+  std::vector<double> body_volume(static_cast<size_t>(std::min(bodies_, kMaxBodyMetrics)), 0.0);
   {
     const size_t npe = static_cast<size_t>(model_.nodes_per_element());
     for (size_t e = 0; e < model_.tets.size(); e += npe) {
@@ -515,11 +540,22 @@ EngineMetrics FemEngine::metrics() const {
         const size_t n = 3 * static_cast<size_t>(model_.tets[e + static_cast<size_t>(a)]);
         for (int c = 0; c < 3; ++c) d[a - 1][c] = model_.nodes[n + static_cast<size_t>(c)] + u_[n + static_cast<size_t>(c)] - p0[c] - u0[c];
       }
-      volume += (d[0][0] * (d[1][1] * d[2][2] - d[1][2] * d[2][1]) - d[0][1] * (d[1][0] * d[2][2] - d[1][2] * d[2][0]) +
-                 d[0][2] * (d[1][0] * d[2][1] - d[1][1] * d[2][0])) / 6;
+      const double v = (d[0][0] * (d[1][1] * d[2][2] - d[1][2] * d[2][1]) - d[0][1] * (d[1][0] * d[2][2] - d[1][2] * d[2][0]) +
+                        d[0][2] * (d[1][0] * d[2][1] - d[1][1] * d[2][0])) / 6;
+      volume += v;
+      if (!body_volume.empty()) {
+        const size_t b = static_cast<size_t>(element_body_[e / npe]);
+        if (b < body_volume.size()) body_volume[b] += v;
+      }
     }
   }
   m.extra = {static_cast<double>(newton_), static_cast<double>(cg_), volume, static_cast<double>(model_.node_count())};
+  if (options_.contact.enabled) {
+    const FemContact* contact = dynamics_ ? dynamics_->contact() : nullptr;
+    const std::vector<Real> u(u_.begin(), u_.end());
+    m.extra.push_back(contact ? contact->deepest_penetration(model_, u.data()) : 0.0);
+    m.extra.insert(m.extra.end(), body_volume.begin(), body_volume.end());
+  }
   m.springs_cut = faces_cut_;  // the FEM's cuts: faces separated
   m.triangles_removed = triangles_removed_;
   return m;

@@ -167,5 +167,39 @@ TEST(FemContact, BodiesByLabelAndChecks) {
   EXPECT_THROW(FemContact(m, FemContactOptions{true, true, 0, 4, 0, 0}), InputError);
 }
 
+// Two unit cubes of 6 tets, the second moved by `offset`: two bodies of one model (no shared node).
+FemModel two_cubes(const std::array<double, 3>& offset) {
+  TetMesh mesh = tet_mesh_of(fem_box_mesh({1, 1, 1}, {1, 1, 1}));
+  const size_t nodes = mesh.nodes.size() / 3, tets = mesh.tets.size();
+  for (size_t n = 0; n < nodes; ++n)
+    for (size_t a = 0; a < 3; ++a) mesh.nodes.push_back(mesh.nodes[3 * n + a] + offset[a]);
+  for (size_t t = 0; t < tets; ++t) mesh.tets.push_back(mesh.tets[t] + static_cast<int32_t>(nodes));
+  mesh.tet_labels.resize(mesh.tets.size() / 4, 1);
+  return build_fem_model(mesh, test::fem_material(FemMaterialModel::linear));
+}
+
+// Inside or outside is decided by the other body's nearest feature. The second cube's corner at
+// (0.99, 1.02, 0.5), beside the first cube's convex top edge, lies behind the plane of the first cube's
+// x = 1 face (its closest point on that face is on the edge, 0.022 mm away) yet outside it, 0.02 mm above
+// the top face: no contact, and the two cubes do not overlap. (The rule taken from a face's plane alone
+// pushed such nodes; on the kidney pressed into the liver it inverted elements within 0.1 s.) Moved
+// 0.03 mm into the first cube instead, the corner is inside and pushed out.
+TEST(FemContact, ANodeBesideAConvexEdgeIsOutsideAndANodeBehindAFaceIsInside) {
+  const FemModel beside = two_cubes({0.99, 1.02, -0.5});
+  FemContact a(beside, FemContactOptions{true, false, 0.1, 4, 1, 0});
+  ASSERT_EQ(a.bodies(), 2);
+  std::vector<Real> u(beside.nodes.size(), 0), inv_mass(beside.nodes.size() / 3, 1);
+  EXPECT_EQ(a.deepest_penetration(beside, u.data()), 0.0);
+  EXPECT_EQ(a.resolve(beside, u.data(), inv_mass.data()), 0);
+  for (const Real x : u) EXPECT_EQ(x, 0);
+
+  const FemModel inside = two_cubes({0.97, 0.25, 0.25});  // the corner (0.97, 0.25, 0.25) 0.03 mm deep
+  FemContact b(inside, FemContactOptions{true, false, 0.1, 4, 1, 0});
+  std::fill(u.begin(), u.end(), Real{0});
+  EXPECT_NEAR(b.deepest_penetration(inside, u.data()), 0.03, 1e-9);
+  EXPECT_GE(b.resolve(inside, u.data(), inv_mass.data()), 1);
+  EXPECT_LT(b.deepest_penetration(inside, u.data()), 1e-3);
+}
+
 }  // namespace
 }  // namespace ctsurg::sim

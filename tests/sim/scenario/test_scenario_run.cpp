@@ -269,6 +269,46 @@ TEST(ScenarioRun, FemStaticAndDynamicAgreeAndTheGrabIsPrescribed) {
   EXPECT_LT(worst, 0.05);
 }
 
+// Two organs in contact, as data_samples/scenarios/abdomen_contact.yaml on the bar: its halves labelled 1
+// and 2, separated by contact.bodies.labels, the left end fixed and the right end pushed 0.8 mm into the
+// left half. Without a surface file the trajectory draws the tet mesh's boundary: each half's own 80
+// triangles (the faces where they touched included). The metrics say the surfaces never pass through
+// each other and each body keeps its volume, while the left half is pushed.
+TEST(ScenarioRun, FemTwoBodiesByLabelPushedTogetherStayApartAndKeepTheirVolumes) {
+  TempDir dir;
+  TetMesh mesh = tet_mesh_of(fem_box_mesh({8, 2, 2}, {32, 8, 8}, {11, -19, 31}));
+  for (size_t e = 0; e < mesh.tet_labels.size(); ++e) {
+    double cx = 0;
+    for (size_t k = 0; k < 4; ++k) cx += 0.25 * mesh.nodes[3 * static_cast<size_t>(mesh.tets[4 * e + k])];
+    mesh.tet_labels[e] = cx < 27 ? 1 : 2;
+  }
+  write_tet_mesh_file(dir.path() / "tetmesh.h5", mesh, ctsurg::test::test_provenance());
+  const std::string text =
+      "ctsurg_scenario: 1\nmodel: {kind: fem, tetmesh: tetmesh.h5, material_law: neo_hookean, solver: dynamic}\n"
+      "material: {youngs_modulus_pa: 20000, poisson_ratio: 0.3, damping_per_s: 200}\n"
+      "fixed: [{box_fraction: {min: [0, 0, 0], max: [0.05, 1, 1]}}]\n"
+      "contact: {self: true, bodies: {labels: true}}\n"
+      "tools:\n  - grab: {radius_mm: 1, path: [{t: 0, position_mm: [43, -15, 35]}, {t: 0.1, offset_mm: [-0.8, 0, 0]}]}\n"
+      "time: {duration_s: 0.15}\noutput: {trajectory: out.h5, frame_interval_s: 0.01}\n";
+  const auto s = parse_scenario(text, dir.path() / "s.yaml", dir.path());
+  const Trajectory t = run_scenario(s);
+  ASSERT_EQ(t.topologies.size(), 1u);
+  EXPECT_EQ(t.topologies[0].size(), 3u * 160);
+  const auto& penetration = t.metric("contact_penetration")->values;
+  EXPECT_LT(*std::max_element(penetration.begin(), penetration.end()), 0.05);  // mm; the detection distance is 0.47 mm
+  for (const char* body : {"body_volume_0", "body_volume_1"}) {
+    const auto& v = t.metric(body)->values;
+    EXPECT_NEAR(v.front(), 32 * 8 * 8 / 2, 1e-6) << body;
+    for (const double x : v) EXPECT_NEAR(x, v.front(), 0.02 * v.front()) << body;
+  }
+  // The left half's nodes on the interface (x = 27) were pushed -x by the right half.
+  const float* last = t.frame_vertices(t.frame_count() - 1);
+  double pushed = 0;
+  for (int64_t v = 0; v < t.vertex_count(); ++v)
+    if (std::abs(t.rest_vertices[static_cast<size_t>(3 * v)] - 27) < 1e-4) pushed = std::min(pushed, double(last[3 * v]) - 27);
+  EXPECT_LT(pushed, -0.3);
+}
+
 namespace {
 
 std::string with(std::string text, const std::string& from, const std::string& to) {

@@ -34,6 +34,7 @@
 
 #include <array>
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 namespace ctsurg {
@@ -88,7 +89,7 @@ class FemContact {
   std::vector<uint32_t> face_body_;    // #F
   std::vector<uint32_t> node_body_;    // #N (boundary nodes; others unused)
   std::vector<uint8_t> on_boundary_;   // #N
-  std::vector<int32_t> node_faces_offsets_, node_faces_;  // node -> its boundary faces (CSR), for normals
+  std::vector<std::pair<std::pair<uint32_t, uint32_t>, uint32_t>> edge_faces_;  // (edge (lo, hi), face), sorted
   std::vector<Pair> pairs_;            // found at the last detection
   int since_detection_ = 0;
   std::vector<double> scratch_;        // positions

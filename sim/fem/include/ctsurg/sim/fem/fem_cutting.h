@@ -78,4 +78,9 @@ class FemTetSeparation {
 // element uses) and the number of pieces.
 int32_t fem_mesh_pieces(const std::vector<int32_t>& tets, int32_t node_count, std::vector<int32_t>& piece_of_node);
 
+// The boundary of linear tets (#T x 4): the faces used by one element only, #F x 3 node ids wound
+// counter-clockwise seen from outside, in element order (and each element's faces in a fixed order).
+// Two bodies pressed together, or the lips of a cut, have separate nodes, so each keeps its own faces.
+std::vector<uint32_t> fem_boundary_faces(const std::vector<int32_t>& tets);
+
 }  // namespace ctsurg::sim

@@ -102,7 +102,9 @@ class FemEngine final : public SimulationEngine {
   void sync() override;
   void positions(std::vector<double>& xyz) const override;
   void surface_vertices(std::vector<float>& xyz) override;
-  const std::vector<uint32_t>& triangles() const override { return surface_.triangles(); }
+  // The embedded surface's triangles; without a surface, the tet mesh's boundary faces over the nodes
+  // (each body's own, a cut's lips included), so a model meshed without a surface still renders.
+  const std::vector<uint32_t>& triangles() const override { return surface_.empty() ? boundary_triangles_ : surface_.triangles(); }
   const std::vector<Real>& surface_rest_vertices() const override { return surface_.rest_vertices(); }
   EngineMetrics metrics() const override;
   bool engaged(size_t tool) const override { return holds_.engaged(tool); }
@@ -153,6 +155,11 @@ class FemEngine final : public SimulationEngine {
   std::vector<int32_t> surface_element_;  // #V
   std::vector<int32_t> surface_corner_;   // #V x 8: the tet corner (0..3) of each tie, -1 for none
   int64_t faces_cut_ = 0, triangles_removed_ = 0, nodes_split_ = 0;
+  // With contact: each element's body at the start (the mesh's connected pieces; a cut later creates or
+  // removes no element, so the bodies' volumes stay comparable), for the metrics body_volume_<b>.
+  std::vector<int32_t> element_body_;
+  std::vector<uint32_t> boundary_triangles_;  // without a surface: the corner tets' boundary (fem_boundary_faces)
+  int32_t bodies_ = 0;
 };
 
 }  // namespace ctsurg::sim
