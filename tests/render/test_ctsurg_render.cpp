@@ -145,3 +145,25 @@ TEST(CtsurgRender, ATrajectoryIsDrawnOnlyOnTheSurfaceItWasSimulatedOn) {
                                                (in.dir / "x.png").string(), "--size", "32"});
   EXPECT_EQ(good.exit_code, 0) << good.output;
 }
+
+// A trajectory simulated without a surface file (an FEM run: its tet mesh's boundary over the nodes) is
+// drawn from its own rest vertices and triangles, without --surface; one that names its surface file
+// needs it, and neither a surface nor a trajectory is exit 2 naming --surface.
+TEST(CtsurgRender, ATrajectoryWithoutASurfaceFileIsDrawnByItsOwnTriangles) {
+  Inputs in;
+  ctsurg::Trajectory t = ctsurg::test::three_frame_trajectory(ctsurg::test::bumpy_organ_surface(24, 12, 64));
+  t.surface_file.clear();
+  ctsurg::write_trajectory_file(in.dir / "own.h5", t, ctsurg::test::test_provenance());
+  const auto good = run_tool("ctsurg-render", {"-t", (in.dir / "own.h5").string(), "--layout", "side-by-side", "-o",
+                                               (in.dir / "own.png").string(), "--size", "48"});
+  ASSERT_EQ(good.exit_code, 0) << good.output;
+  const ctsurg::RgbImage img = ctsurg::read_png(in.dir / "own.png");
+  EXPECT_EQ(img.width, 2 * 48 + 4);  // rest | last frame, a 4-pixel rule between
+  const auto named = run_tool("ctsurg-render", {"-t", in.trajectory.string(), "-o", (in.dir / "x.png").string(), "--size", "32"});
+  EXPECT_EQ(named.exit_code, 2) << named.output;
+  EXPECT_NE(named.output.find("--surface"), std::string::npos) << named.output;
+  EXPECT_FALSE(fs::exists(in.dir / "x.png"));
+  const auto neither = run_tool("ctsurg-render", {"-o", (in.dir / "y.png").string()});
+  EXPECT_EQ(neither.exit_code, 2) << neither.output;
+  EXPECT_NE(neither.output.find("--surface"), std::string::npos) << neither.output;
+}
