@@ -48,7 +48,8 @@ got=$(mk -n heart PATIENTS_DIR="$ROOT/data_samples/patients" OUT="$WORK/bundled"
 [[ "$got" == "ctsurg-grid ctsurg-import ctsurg-normalmap ctsurg-render ctsurg-sim ctsurg-surface ctsurg-tetmesh " ]] || fail "heart: [$got]"
 echo "ok: heart plan: $got"
 # The batch's other patients read ../shared/data: the kidney needs the tet mesh (FEM) and the table,
-# the head (a spring grid without pictures) neither a normal map nor a tet mesh nor a render.
+# the head (a spring grid without pictures) neither a normal map nor a tet mesh nor a render, the abdomen
+# the tet mesh and its pictures only.
 if [[ -f "$ROOT/../shared/data/abdomen/upper_abdomen_ct.nii.gz" && -f "$ROOT/../shared/data/headsq/quarter.nhdr" ]]; then
   got=$(mk -n kidney PATIENTS_DIR="$ROOT/data_samples/patients" OUT="$WORK/bundled" | grep -o 'ctsurg-[a-z]*\|compare-table' | sort -u | tr '\n' ' ')
   [[ "$got" == "compare-table ctsurg-grid ctsurg-import ctsurg-normalmap ctsurg-render ctsurg-sim ctsurg-surface ctsurg-tetmesh " ]] || fail "kidney: [$got]"
@@ -56,7 +57,15 @@ if [[ -f "$ROOT/../shared/data/abdomen/upper_abdomen_ct.nii.gz" && -f "$ROOT/../
   got=$(mk -n head PATIENTS_DIR="$ROOT/data_samples/patients" OUT="$WORK/bundled" | grep -o 'ctsurg-[a-z]*' | sort -u | tr '\n' ' ')
   [[ "$got" == "ctsurg-grid ctsurg-import ctsurg-sim ctsurg-surface " ]] || fail "head: [$got]"
   echo "ok: head plan: $got"
+  # The abdomen (two organs in contact, FEM without a surface file, with pictures): the tet mesh and the
+  # pictures, drawn from the trajectory alone (no surface, no normal map, no --surface).
+  got=$(mk -n abdomen PATIENTS_DIR="$ROOT/data_samples/patients" OUT="$WORK/bundled" | grep -o 'ctsurg-[a-z]*' | sort -u | tr '\n' ' ')
+  [[ "$got" == "ctsurg-grid ctsurg-import ctsurg-render ctsurg-sim ctsurg-tetmesh " ]] || fail "abdomen: [$got]"
+  if mk -n abdomen PATIENTS_DIR="$ROOT/data_samples/patients" OUT="$WORK/bundled" | grep ctsurg-render | grep -q -- "--surface"; then
+    fail "abdomen: ctsurg-render was given a surface"
+  fi
+  echo "ok: abdomen plan: $got"
 else
-  echo "skipped: kidney and head plans (../shared/data absent)"
+  echo "skipped: kidney, head and abdomen plans (../shared/data absent)"
 fi
 echo "PASS"
