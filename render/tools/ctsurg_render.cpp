@@ -149,18 +149,20 @@ int main(int argc, char** argv) {
         std::optional<ctsurg::Trajectory> trajectory;
         if (!trajectory_path.empty()) trajectory = ctsurg::read_trajectory_file(trajectory_path);
         if (surface_path.empty() && !trajectory) throw ctsurg::InputError("--surface", "", "give a surface file, or a trajectory that has its own surface");
-        const ctsurg::SurfaceMesh surface = surface_path.empty() ? ctsurg::trajectory_surface(*trajectory, trajectory_path)
-                                                                 : ctsurg::read_surface_mesh_file(surface_path);
-        if (surface_path.empty()) surface_path = trajectory_path;  // names the model in captions and errors
+        // Without --surface the trajectory draws its own triangles (an FEM run without a surface file).
+        const bool own_surface = surface_path.empty();
+        const ctsurg::SurfaceMesh surface = own_surface ? ctsurg::trajectory_surface(*trajectory, trajectory_path)
+                                                        : ctsurg::read_surface_mesh_file(surface_path);
+        if (own_surface) surface_path = trajectory_path;  // names the model in captions and errors
         ctsurg::RenderModel model{&surface, surface_path, trajectory ? &*trajectory : nullptr, trajectory_path};
         if (trajectory) {
-          if (surface_path != trajectory_path) check_same_surface(*trajectory, trajectory_path, surface_path);
+          if (!own_surface) check_same_surface(*trajectory, trajectory_path, surface_path);
           ctsurg::check_trajectory_matches_surface(*trajectory, trajectory_path, surface, surface_path);
           request.frames = ctsurg::parse_frames(frames_spec.empty() ? "last" : frames_spec, trajectory->frame_count());
         } else if (!frames_spec.empty() && frames_spec != "rest") {
           throw ctsurg::InputError("--frames", "", "'" + frames_spec + "' needs --trajectory; without one only the rest surface is drawn");
         }
-        if (request.style.normal_map && surface.normal_map.empty() && surface_path != trajectory_path) {
+        if (request.style.normal_map && surface.normal_map.empty() && !own_surface) {
           spdlog::warn("{} has no normal map (/surface/normal_map): shading with its normals only (run ctsurg-normalmap "
                        "for the detail)", surface_path);
         }
@@ -173,7 +175,12 @@ int main(int argc, char** argv) {
           const std::string format = ctsurg::ctsurg_file_format(reference);
           if (format == "trajectory") {
             reference_trajectory = ctsurg::read_trajectory_file(reference);
-            check_same_surface(*reference_trajectory, reference, surface_path);
+            if (own_surface && !reference_trajectory->surface_file.empty()) {
+              throw ctsurg::InputError(reference, "/trajectory@surface_file",
+                                       "simulated on the surface '" + reference_trajectory->surface_file + "', but " +
+                                           trajectory_path + " has none: compare trajectories simulated on the same model");
+            }
+            if (!own_surface) check_same_surface(*reference_trajectory, reference, surface_path);
             // Another run on the same surface (model B, or the GPU backend) unless its vertex count says otherwise.
             if (reference_trajectory->vertex_count() != surface.vertex_count()) {
               throw ctsurg::InputError(reference, "/trajectory/surface/rest_vertices",

@@ -18,9 +18,6 @@ namespace {
 
 constexpr const char* kWhere = "fem contact";
 
-// The faces of a positively oriented tet (0, 1, 2, 3), wound outwards: opposite corner 3, 2, 0, 1.
-constexpr int kOutwardFaces[4][3] = {{0, 2, 1}, {0, 1, 3}, {1, 2, 3}, {0, 3, 2}};
-
 std::array<double, 3> face_normal(const std::vector<double>& x, const uint32_t* f) {  // not normalised: 2 x area
   const double* a = &x[3 * static_cast<size_t>(f[0])];
   const double* b = &x[3 * static_cast<size_t>(f[1])];
@@ -286,7 +283,7 @@ BodySeparation separate_bodies(TetMesh& mesh, bool by_label, const std::vector<H
   // Face neighbours.
   std::vector<std::pair<std::array<int32_t, 3>, int32_t>> all;
   for (int32_t e = 0; e < nt; ++e)
-    for (const auto& f : kOutwardFaces) {
+    for (const auto& f : kTetOutwardFaces) {
       std::array<int32_t, 3> key{};
       for (int k = 0; k < 3; ++k) key[static_cast<size_t>(k)] = mesh.tets[4 * static_cast<size_t>(e) + static_cast<size_t>(f[k])];
       std::sort(key.begin(), key.end());

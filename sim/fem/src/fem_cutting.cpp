@@ -180,15 +180,13 @@ int32_t fem_mesh_pieces(const std::vector<int32_t>& tets, int32_t node_count, st
 }
 
 std::vector<uint32_t> fem_boundary_faces(const std::vector<int32_t>& tets) {
-  // Outward faces of a positively oriented tet (corners 0..3).
-  static constexpr int kOutward[4][3] = {{0, 2, 1}, {0, 1, 3}, {1, 2, 3}, {0, 3, 2}};
   const size_t nt = tets.size() / 4;
   std::vector<std::pair<std::array<int32_t, 3>, uint32_t>> keys;  // sorted corners, 4 e + f
   keys.reserve(4 * nt);
   for (size_t e = 0; e < nt; ++e)
     for (uint32_t f = 0; f < 4; ++f) {
       std::array<int32_t, 3> k{};
-      for (size_t c = 0; c < 3; ++c) k[c] = tets[4 * e + static_cast<size_t>(kOutward[f][c])];
+      for (size_t c = 0; c < 3; ++c) k[c] = tets[4 * e + static_cast<size_t>(kTetOutwardFaces[f][c])];
       std::sort(k.begin(), k.end());
       keys.emplace_back(k, static_cast<uint32_t>(4 * e + f));
     }
@@ -203,7 +201,7 @@ std::vector<uint32_t> fem_boundary_faces(const std::vector<int32_t>& tets) {
   std::vector<uint32_t> faces;
   for (size_t ef = 0; ef < single.size(); ++ef) {
     if (!single[ef]) continue;
-    for (size_t c = 0; c < 3; ++c) faces.push_back(static_cast<uint32_t>(tets[4 * (ef / 4) + static_cast<size_t>(kOutward[ef % 4][c])]));
+    for (size_t c = 0; c < 3; ++c) faces.push_back(static_cast<uint32_t>(tets[4 * (ef / 4) + static_cast<size_t>(kTetOutwardFaces[ef % 4][c])]));
   }
   return faces;
 }

@@ -1,5 +1,6 @@
 // Small graph helpers of the mesh's topology code (fem_cutting.cpp, fem_contact.cpp): a union-find whose
-// roots are the lowest members (deterministic groups), and a CSR adjacency from (row, value) pairs.
+// roots are the lowest members (deterministic groups), a CSR adjacency from (row, value) pairs, and a tet's
+// outward faces.
 #pragma once
 
 #include <algorithm>
@@ -9,6 +10,9 @@
 #include <vector>
 
 namespace ctsurg::sim {
+
+// The faces of a positively oriented tet (corners 0, 1, 2, 3), wound outwards: opposite corner 3, 2, 0, 1.
+inline constexpr int kTetOutwardFaces[4][3] = {{0, 2, 1}, {0, 1, 3}, {1, 2, 3}, {0, 3, 2}};
 
 struct UnionFind {
   std::vector<int32_t> parent;
