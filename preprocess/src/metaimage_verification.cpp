@@ -22,6 +22,8 @@ namespace ctsurg {
 namespace {
 
 constexpr std::size_t kMaxHeaderBytes = 1 << 20;
+constexpr std::size_t kMaxMetaIOString = 255;       // MET_MAX_NAME_SIZE and MetaObject's char[255] fields
+constexpr std::size_t kMaxMetaIOFieldBytes = 4096;  // MET_MAX_NUMBER_OF_FIELD_VALUES: MET_Read's limit of a string value
 
 // Bytes of each MetaIO element type (metaTypes.h, MET_ValueTypeSize).
 const std::map<std::string, int>& element_sizes() {
@@ -81,6 +83,17 @@ Header read_header(const fs::path& path, const std::string& name) {
       throw InputError(name, "header", "line '" + trim(line).substr(0, 60) + "' is not 'Key = Value'");
     }
     const std::string key = trim(line.substr(0, eq)), value = trim(line.substr(eq + 1));
+    // MetaIO (ITK 5.2) copies keys and string values into 255-byte buffers with strcpy
+    // (metaTypes.h MET_MAX_NAME_SIZE; metaObject.h m_ObjectTypeName, m_Comment, m_Name ...): longer ones
+    // overflow them, so they are refused here, before ITK sees the file. ElementDataFile is a std::string.
+    if (key.size() >= kMaxMetaIOString) {
+      throw InputError(name, "header", "a key of " + std::to_string(key.size()) + " characters ('" + key.substr(0, 40) +
+                                           "...'): MetaImage keys are at most " + std::to_string(kMaxMetaIOString - 1));
+    }
+    if (value.size() >= (key == "ElementDataFile" ? kMaxMetaIOFieldBytes : kMaxMetaIOString)) {
+      throw InputError(name, key, "a value of " + std::to_string(value.size()) + " characters: MetaImage header values are at most " +
+                                      std::to_string((key == "ElementDataFile" ? kMaxMetaIOFieldBytes : kMaxMetaIOString) - 1));
+    }
     h.fields[key] = value;
     if (key != "ElementDataFile") continue;
     h.data_start = position;

@@ -110,3 +110,21 @@ TEST(MetaImageVerification, AbsurdHeadersAreRefusedAtOnce) {
   std::ofstream(tmp / "many.mhd") << kHeader << "ElementDataFile = s%d.raw 0 2000000000 1\n";
   expect_refused(tmp / "many.mhd", "ElementDataFile", "million");
 }
+
+// tests/fuzz_regressions/README.md: an ObjectType of 259 characters overflowed MetaIO's char[255] in
+// MetaObject::M_Read (glibc's fortify check aborted the fuzzer). Keys and string values that do not fit
+// MetaIO's buffers are refused before ITK reads the header, naming the field.
+TEST(MetaImageVerification, HeaderValuesLongerThanMetaIOsBuffersAreRefused) {
+  test::TempDir tmp;
+  const auto finding = tmp / "finding.mha";  // the reader goes by the extension
+  fs::copy_file(test::source_dir() / "tests" / "fuzz_regressions" / "fuzz_metaimage" / "crash-a7ee1548", finding);
+  expect_refused(finding, "ObjectType", "at most 254");
+  EXPECT_THROW(read_image_file(finding), InputError);
+  const std::string long_value(255, 'x');
+  std::ofstream(tmp / "c.mha") << "Comment = " << long_value << "\n" << kHeader << "ElementDataFile = LOCAL\n" << floats(27);
+  expect_refused(tmp / "c.mha", "Comment", "255 characters");
+  std::ofstream(tmp / "k.mha") << long_value << " = 1\n" << kHeader << "ElementDataFile = LOCAL\n" << floats(27);
+  expect_refused(tmp / "k.mha", "header", "key of 255");
+  std::ofstream(tmp / "ok.mha") << "Comment = " << long_value.substr(0, 254) << "\n" << kHeader << "ElementDataFile = LOCAL\n" << floats(27);
+  EXPECT_NO_THROW(verify_metaimage_file(tmp / "ok.mha", false)) << "254 characters fit";
+}
