@@ -5,6 +5,11 @@ function(ctsurg_add_tool name source library)
   ctsurg_target_warnings(${name})
   ctsurg_driver_optimization(${name})
   install(TARGETS ${name} RUNTIME DESTINATION bin)
+  # ctsurg_tools: every tool and nothing else (the demo builds this, not the tests and benchmarks).
+  if(NOT TARGET ctsurg_tools)
+    add_custom_target(ctsurg_tools)
+  endif()
+  add_dependencies(ctsurg_tools ${name})
 endfunction()
 
 # ctsurg_driver_optimization(<target>): CTSURG_DRIVER_OPTIMIZATION (e.g. -O0) for a test program or a tool

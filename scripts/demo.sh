@@ -6,7 +6,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 scripts/install-deps.sh
-scripts/build.sh
+scripts/build.sh --tools
 make --no-print-directory -f scripts/Makefile -j"${CTSURG_JOBS:-2}" demo
 echo
 cat build/demo/heart/results.txt
