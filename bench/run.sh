@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Reruns every benchmark with one command and rewrites docs/benchmarks.md (machine and date included).
 #   bench/run.sh                 build (Release) if needed, then run every section
-#   bench/run.sh render fem      only these sections (preprocess tetmesh surface sim render fem collision instruments
+#   bench/run.sh render fem      only these sections (preprocess tetmesh surface sim render fem collision instruments vessel
 #                                kidney accuracy);
 #                                the others in docs/benchmarks.md stay as they are
 #   BUILD=build-dev bench/run.sh fem        an existing build folder (brought up to date) instead of the release preset
@@ -311,6 +311,25 @@ if want instruments; then
     "$BIN/bench_instruments" --benchmark_format=json 2>/dev/null | gbench_table
   } >"$ins"
   splice instruments "$ins"
+fi
+
+# Vessel: bench_vessel (the medial-atom vessel model's step and surface, 100 to 10,000 atoms).
+if want vessel; then
+  ves=$WORK/vessel.md
+  {
+    echo "## Vessel model: a step and a surface for 100 to 10,000 atoms (\`bench/run.sh vessel\`)"
+    echo
+    machine_line
+    echo "date: $(date -u +%Y-%m-%d); ctsurg $(git describe --always --dirty 2>/dev/null || echo unknown), Release build."
+    echo "\`build/bin/bench_vessel\` (docs/vessel.md): BM_VesselStep/N is one implicit step (1/60 s, at most 6 Gauss-Newton"
+    echo "iterations) of a straight vessel of N atoms 1 mm apart (r 2 mm, wall 0.4 mm, E 1 MPa) clamped at one end and sagging"
+    echo "under gravity; realtime_factor is simulated seconds per wall second (1 or more: real time). BM_VesselSurface/N/S"
+    echo "redraws the tube (S spokes per ring, rotation-minimising frames) from the atoms, once per output frame. One thread."
+    echo "Load average at the start: $(cut -d' ' -f1-3 /proc/loadavg)."
+    echo
+    "$BIN/bench_vessel" --benchmark_format=json 2>/dev/null | gbench_table
+  } >"$ves"
+  splice vessel "$ves"
 fi
 
 # Collision: bench_collision (the spatial hash rebuilt and queried each step, against CGAL's AABB tree and

@@ -68,6 +68,8 @@ using namespace ctsurg::sim;
 
 namespace {
 
+constexpr double kNearMm = 20;  // the local-region table's "near the tool": within this of the most displaced vertex
+
 struct Level {
   double h = 0;  // mm, grid cell and tet size
   fs::path dir;  // grid.h5, surface.h5, tetmesh.h5 (and surface_fem.h5 for the cantilever)
@@ -95,16 +97,19 @@ struct Config {
   std::string linear;      // fem static: "" (auto) | iterative
   double safety = 0.5;     // springs and explicit FEM
   const Level* level = nullptr;
+  double local_mm = 0;     // fem static: local_region radius (fem_local_region.h); 0: the whole mesh
+  int balance = 0;         // local_region balance_iterations
   bool dynamic() const { return model != "fem" || solver != "static"; }
   std::string family() const {  // the plot's colour
     if (model != "fem") return model;
-    return law + (order == 2 ? " P2" : "") + (solver == "static" ? "" : " " + solver);
+    return law + (order == 2 ? " P2" : "") + (solver == "static" ? "" : " " + solver) + (local_mm > 0 ? " local" : "");
   }
   std::string label() const {
     std::ostringstream s;
     s << (model == "fem" ? "fem " + law + (order == 2 ? " P2" : "") + " " + solver : model) << " h" << level->h;
     if (tolerance_mm > 0) s << " tol" << tolerance_mm;
     if (!linear.empty()) s << " " << linear;
+    if (local_mm > 0) s << " local R" << local_mm << (balance > 0 ? " balanced" : "");
     if (model != "fem" || solver == "dynamic") s << " sf" << safety;
     return s.str();
   }
@@ -168,10 +173,11 @@ std::string scenario_text(const Spec& sp, const Config& c, bool single_frame = f
   s << "time:\n  duration_s: " << duration << "\n";
   if (c.model != "fem" || c.solver == "dynamic") s << "  safety_factor: " << c.safety << "\n";
   s << "output:\n  trajectory: unused.h5\n  frame_interval_s: " << frame << "\n";
-  if (c.model == "fem" && c.solver != "dynamic" && (c.tolerance_mm > 0 || !c.linear.empty())) {
+  if (c.model == "fem" && c.solver != "dynamic" && (c.tolerance_mm > 0 || !c.linear.empty() || c.local_mm > 0)) {
     s << "solver:\n";
     if (c.tolerance_mm > 0) s << "  tolerance_mm: " << c.tolerance_mm << "\n";
     if (!c.linear.empty()) s << "  linear: " << c.linear << "\n";
+    if (c.local_mm > 0) s << "  local_region: {radius_mm: " << c.local_mm << ", balance_iterations: " << c.balance << "}\n";
   }
   return s.str();
 }
@@ -275,6 +281,7 @@ struct Result {
   bool ok = false;
   std::string failure;
   std::vector<double> curve_wall, curve_rms, curve_max, curve_time;
+  std::vector<double> final_u;  // the last frame's displacement at the reference points
   double cost(bool per_frame) const { return per_frame ? frame : total; }
 };
 
@@ -395,6 +402,7 @@ Result run_config(const Spec& sp, const Config& c, const std::vector<double>& re
       r.curve_max.push_back(e.max);
       if (f == frames - 1) {
         r.err = e;
+        r.final_u = u;
         if (!analytic.empty()) r.analytic = error_of(u, analytic, use);
       }
     }
@@ -450,15 +458,16 @@ std::vector<double> reference(const Spec& sp, const Level& level, const std::vec
 int main(int argc, char** argv) {
   fs::path inputs, out;
   std::string which = "cantilever,kidney,heart";
-  bool quick = false;
+  bool quick = false, local_only = false;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--inputs" && i + 1 < argc) inputs = argv[++i];
     else if (a == "--out" && i + 1 < argc) out = argv[++i];
     else if (a == "--scenarios" && i + 1 < argc) which = argv[++i];
     else if (a == "--quick") quick = true;
+    else if (a == "--local-only") local_only = true;
     else {
-      std::cerr << "usage: time_vs_error --inputs DIR --out DIR [--scenarios cantilever,kidney,heart] [--quick]\n";
+      std::cerr << "usage: time_vs_error --inputs DIR --out DIR [--scenarios cantilever,kidney,heart] [--quick] [--local-only]\n";
       return 2;
     }
   }
@@ -516,7 +525,10 @@ int main(int argc, char** argv) {
     specs.push_back(s);
   }
 
-  std::ofstream runs(out / "runs.csv"), curves(out / "curves.csv"), budgets(out / "budgets.md");
+  std::ofstream runs(out / "runs.csv"), curves(out / "curves.csv"), budgets(out / "budgets.md"), local(out / "local_region.md");
+  local << "Local region (fem_local_region.h) against the full Neo-Hookean static solve on the same mesh (linear tets, default "
+           "tolerance). Near: the reference surface within " << kNearMm << " mm (rest) of its most displaced vertex (where the tool "
+           "acts); far: the rest. Errors at the last frame, mm; time per frame after the first (heart) or setup + solve.\n";
   runs << "scenario,configuration,model,law,solver,elements,tolerance_mm,level_mm,nodes,dt_s,safety,steps,setup_s,frame_s,total_s,"
           "rms_mm,max_mm,volume_change_pct,analytic_rms_mm,analytic_max_mm,status\n";
   curves << "scenario,configuration,sim_time_s,wall_s,rms_mm,max_mm\n";
@@ -552,6 +564,19 @@ int main(int argc, char** argv) {
     for (size_t li = 0; li < sp.levels.size(); ++li) {
       const Level* l = &sp.levels[li];
       const bool coarse = li < 2, finest = li + 1 == sp.levels.size();
+      // The local region (issue 20): Newton within R mm of the tool, the rest linear; against the full
+      // solve on the same mesh in local_region.md.
+      const auto add_local = [&] {
+        for (const double R : {10.0, 20.0, 40.0}) add({"fem", "neo_hookean", "static", 1, 0, "", 0.5, l, R, 0});
+        add({"fem", "neo_hookean", "static", 1, 0, "", 0.5, l, 20, 20});
+      };
+      if (local_only) {
+        add({"fem", "linear", "static", 1, 0, "", 0.5, l});
+        add({"fem", "neo_hookean", "static", 1, 0, "", 0.5, l});
+        add_local();
+        continue;
+      }
+      add_local();
       for (const double sf : {0.5, 0.9}) add({"spring_grid", "", "dynamic", 1, 0, "", sf, l});
       if (!finest || !sp.per_frame) add({"explicit_springs", "", "dynamic", 1, 0, "", 0.5, l});
       // Static FEM on linear tets: every law; the nonlinear ones at the default tolerance and at budgets in mm.
@@ -593,6 +618,43 @@ int main(int argc, char** argv) {
       runs.flush(), curves.flush();
       results.push_back(std::move(r));
     }
+    // Near and far from the tool: the reference surface within kNearMm of its most displaced vertex.
+    std::vector<uint8_t> near(np, 0), far(np, 0);
+    {
+      size_t peak = 0;
+      double peak_u = -1;
+      for (size_t p = 0; p < np; ++p) {
+        const double u2 = ref_u[3 * p] * ref_u[3 * p] + ref_u[3 * p + 1] * ref_u[3 * p + 1] + ref_u[3 * p + 2] * ref_u[3 * p + 2];
+        if (u2 > peak_u) peak_u = u2, peak = p;
+      }
+      for (size_t p = 0; p < np; ++p) {
+        double d2 = 0;
+        for (int c = 0; c < 3; ++c) d2 += (ref_points[3 * p + c] - ref_points[3 * peak + c]) * (ref_points[3 * p + c] - ref_points[3 * peak + c]);
+        near[p] = d2 <= kNearMm * kNearMm;
+        far[p] = !near[p];
+      }
+    }
+    local << "\n#### " << sp.name << "\n\n| h (mm) | configuration | " << (sp.per_frame ? "time per frame" : "setup + solve")
+          << " | near RMS / max | far RMS / max | vs the reference (RMS) |\n|---:|---|---:|---|---|---:|\n";
+    for (const Level& l : sp.levels) {
+      const Result* full = nullptr;
+      for (const auto& r : results)
+        if (r.ok && r.config.level == &l && r.config.model == "fem" && r.config.law == "neo_hookean" && r.config.solver == "static" &&
+            r.config.order == 1 && r.config.tolerance_mm == 0 && r.config.local_mm == 0)
+          full = &r;
+      if (!full) continue;
+      for (const auto& r : results) {
+        if (!r.ok || r.config.level != &l || r.config.model != "fem" || r.config.solver != "static" || r.config.order != 1 ||
+            r.config.tolerance_mm != 0 || !r.config.linear.empty() || (r.config.law != "linear" && r.config.law != "neo_hookean"))
+          continue;
+        const Error n = error_of(r.final_u, full->final_u, near), f = error_of(r.final_u, full->final_u, far);
+        char buf[512];
+        std::snprintf(buf, sizeof buf, "| %g | %s | %.3g s | %.3g / %.3g | %.3g / %.3g | %.3g |\n", l.h, r.label.c_str(), r.cost(sp.per_frame),
+                      n.rms, n.max, f.rms, f.max, r.err.rms);
+        local << buf;
+      }
+    }
+    local.flush();
     pareto_png(sp.name + ": " + (sp.per_frame ? "time per frame" : "time") + " vs error", results, sp.per_frame,
                out / ("pareto_" + sp.name + ".png"));
     // The reference's own error: the same model one level coarser (Richardson, p = 2 and 3).

@@ -5,6 +5,7 @@
 #   bench/time_vs_error.sh [BUILD_DIR [OUT]]      (default build, build/time_vs_error)
 #   QUICK=1 bench/time_vs_error.sh ...            three levels per scenario instead of five
 #   SCENARIOS=cantilever,kidney bench/time_vs_error.sh ...
+#   LOCAL_ONLY=1 bench/time_vs_error.sh ...       only the local-region rows (linear, full Neo-Hookean, local R): local_region.md
 # Writes OUT/runs.csv, OUT/curves.csv, OUT/pareto_*.png, OUT/budgets.md (the table for docs/accuracy.md
 # and docs/benchmarks.md). Needs ../shared/data/abdomen for the kidney.
 set -euo pipefail
@@ -37,7 +38,7 @@ if [[ $SCENARIOS == *heart* ]]; then
   [[ -f $IN/heart/ct.h5 ]] || "$BIN/ctsurg-import" -q data_samples/heart/heart_ct.nii.gz "$IN/heart/ct.h5"
   for v in 7.2 4.8 3.6 2.4; do level heart "$IN/heart/ct.h5" data_samples/heart/heart_mask.nii.gz $v; done
 fi
-"$BIN/time_vs_error" --inputs "$IN" --out "$OUT" --scenarios "$SCENARIOS" ${QUICK:+--quick}
+"$BIN/time_vs_error" --inputs "$IN" --out "$OUT" --scenarios "$SCENARIOS" ${QUICK:+--quick} ${LOCAL_ONLY:+--local-only}
 # Peak resident memory of the direct solver on the heart's finest levels: ctsurg-sim (the whole tool:
 # files, model, surface, factor) on one static frame of the grab, GNU time's maximum RSS.
 if [[ $SCENARIOS == *heart* && -z ${QUICK:-} ]]; then

@@ -5,7 +5,7 @@
                    [--other S2.yaml ...] -o PATIENT_OUT/mk/S.mk
 
 The fragment comes from `ctsurg-sim --describe S.yaml`: the stage outputs the scenario reads
-(grid.h5, surface.h5, surface_textured.h5, tetmesh.h5, named relative to the scenario's folder)
+(grid.h5, surface.h5, surface_textured.h5, tetmesh.h5, centerline.h5, named relative to the scenario's folder)
 become prerequisites in PATIENT_OUT, the trajectory becomes PATIENT_OUT/<its file name>, and each
 render request becomes one ctsurg-render rule (PATIENT_OUT/<name>.png, or a folder of pictures plus
 PATIENT_OUT/<name>.frames for multi-frame requests). A render reference names another scenario of the
@@ -22,7 +22,11 @@ import shlex
 import subprocess
 import sys
 
-STAGE_OUTPUTS = {"grid.h5", "surface.h5", "surface_textured.h5", "tetmesh.h5"}
+STAGE_OUTPUTS = {"grid.h5", "surface.h5", "surface_textured.h5", "tetmesh.h5", "centerline.h5"}
+INPUT_KINDS = ("grid", "tetmesh", "surface", "centerline")
+# Models whose trajectory carries its own triangles (an FEM run without model.surface: its tet mesh's
+# boundary; a vessel: the tube drawn from its atoms), which ctsurg-render draws without --surface.
+OWN_SURFACE_MODELS = {"fem", "vessel"}
 MULTI = (",", ":")
 
 
@@ -80,9 +84,9 @@ def main():
              f"# model: {d.get('model')}" + (f" ({d.get('material_law')}, {d.get('solver')})" if d.get("model") == "fem" else ""),
              f"{key}.scenario.{stem} := {traj}"]
     targets = [traj]
-    prereqs = " ".join([inputs[k] for k in ("grid", "tetmesh", "surface") if k in inputs]
+    prereqs = " ".join([inputs[k] for k in INPUT_KINDS if k in inputs]
                        + [q(os.path.abspath(m)) for m in d.get("instruments", [])])  # instrument meshes: source files
-    opts = " ".join(f"--{k} {q(inputs[k])}" for k in ("grid", "tetmesh", "surface") if k in inputs)
+    opts = " ".join(f"--{k} {q(inputs[k])}" for k in INPUT_KINDS if k in inputs)
     lines += [f"{traj} {xdmf} &: {sc} {prereqs} $(BIN)/ctsurg-sim",
               f"\t$(BIN)/ctsurg-sim -q {q(sc)} {opts} -o {q(traj)} $({key}.SIM_ARGS)"]
 
@@ -91,7 +95,7 @@ def main():
     for r in renders:
         # Without model.surface an FEM trajectory carries its tet mesh's boundary, which ctsurg-render draws.
         surface = inputs.get("surface")
-        if not surface and d.get("model") != "fem":
+        if not surface and d.get("model") not in OWN_SURFACE_MODELS:
             fail(f"{a.scenario}: render '{r['name']}' needs model.surface (a surface to draw)")
         pre = [traj] + ([surface] if surface else [])
         ref_opt = ""

@@ -63,8 +63,17 @@ std::string trajectory_xdmf(const std::string& h5, const Trajectory& t) {
       << slab("/trajectory/surface/vertices", i, v, f) << "<DataItem Dimensions=\"" << v
       << " 3\" NumberType=\"Float\" Precision=\"4\" Format=\"HDF\">" << h5
       << ":/trajectory/surface/rest_vertices</DataItem></DataItem>\n"
-      << "        </Attribute>\n"
-      << "      </Grid>\n";
+      << "        </Attribute>\n";
+    if (!t.vertex_region.empty()) {
+      // Row i of (F, V): a hyperslab of start (i, 0), stride (1, 1), count (1, V).
+      x << "        <Attribute Name=\"local_region\" AttributeType=\"Scalar\" Center=\"Node\">\n"
+        << "          <DataItem ItemType=\"HyperSlab\" Dimensions=\"" << v << "\" Type=\"HyperSlab\">"
+        << "<DataItem Dimensions=\"3 2\" Format=\"XML\">" << i << " 0 1 1 1 " << v << "</DataItem>"
+        << "<DataItem Dimensions=\"" << f << " " << v << "\" NumberType=\"UChar\" Precision=\"1\" Format=\"HDF\">" << h5
+        << ":/trajectory/surface/vertex_region</DataItem></DataItem>\n"
+        << "        </Attribute>\n";
+    }
+    x << "      </Grid>\n";
   }
   x << "    </Grid>\n";
   if (np > 0) {
@@ -121,6 +130,19 @@ void validate_trajectory(const Trajectory& t, const std::string& file) {
     for (size_t k = 0; k < t.topologies.size(); ++k) {
       if (t.closing_triangles[k] < 0 || static_cast<uint64_t>(t.closing_triangles[k]) > t.topologies[k].size() / 3) {
         throw InputError(file, "/trajectory/surface/closing_triangles", "entry " + std::to_string(k) + " is not in [0, the topology's triangles]");
+      }
+    }
+  }
+  if (!t.vertex_region.empty()) {
+    if (t.vertex_region.size() != nf * nv) {
+      throw InputError(file, "/trajectory/surface/vertex_region",
+                       "expected (" + std::to_string(nf) + ", " + std::to_string(nv) + ") flags, one per frame and vertex");
+    }
+    for (size_t i = 0; i < t.vertex_region.size(); ++i) {
+      if (t.vertex_region[i] > 2) {
+        throw InputError(file, "/trajectory/surface/vertex_region",
+                         "frame " + std::to_string(i / nv) + ", vertex " + std::to_string(i % nv) + ": flag " +
+                             std::to_string(t.vertex_region[i]) + " is not 0 (outside), 1 (region) or 2 (interface)");
       }
     }
   }
@@ -217,6 +239,7 @@ void write_trajectory_file(const std::filesystem::path& path, const Trajectory& 
         if (!t.closing_triangles.empty()) {
           s.write_dataset("closing_triangles", t.closing_triangles, std::array<uint64_t, 1>{t.closing_triangles.size()});
         }
+        if (!t.vertex_region.empty()) s.write_dataset("vertex_region", t.vertex_region, std::array<uint64_t, 2>{nf, nv});
         h5::Group topo = s.create_group("topologies");
         for (size_t k = 0; k < t.topologies.size(); ++k) {
           const std::array<uint64_t, 2> t3{t.topologies[k].size() / 3, 3};
@@ -302,6 +325,10 @@ Trajectory read_trajectory_file(const std::filesystem::path& path) {
   if (s.has("closing_triangles")) {  // optional: files from before hole filling have none
     t.closing_triangles = s.read_dataset<int64_t>("closing_triangles", &shape);
     expect(s, "closing_triangles", {static_cast<int64_t>(t.topologies.size())});
+  }
+  if (s.has("vertex_region")) {  // optional: only runs with an FEM local region have it
+    t.vertex_region = s.read_dataset<uint8_t>("vertex_region", &shape);
+    expect(s, "vertex_region", {nf, nv});
   }
   // The metrics in the order written (/trajectory/metrics@names), each with its units attribute.
   const h5::Group m = g.open_group("metrics");

@@ -54,6 +54,38 @@ void draw_caption(RgbImage& image, const std::string& text) {
               thickness, cv::LINE_AA);
 }
 
+void draw_region_legend(RgbImage& image, const std::string& text, const float rgb[3]) {
+  if (text.empty() || image.empty()) return;
+  cv::Mat m = as_mat(image);
+  double scale = text_scale(image.height);
+  const int thickness = scale > 0.7 ? 2 : 1;
+  int baseline = 0;
+  cv::Size size = cv::getTextSize(text, cv::FONT_HERSHEY_SIMPLEX, scale, thickness, &baseline);
+  // Narrow pictures (a small side-by-side panel): smaller text, so the legend fits.
+  const int room = image.width - 5 * std::max(2, int(std::lround(4 * scale))) - (size.height + baseline);
+  if (size.width > room && room > 0) {
+    scale = std::max(0.25, scale * room / size.width);
+    size = cv::getTextSize(text, cv::FONT_HERSHEY_SIMPLEX, scale, thickness, &baseline);
+  }
+  const int pad = std::max(2, int(std::lround(4 * scale)));
+  const int swatch = size.height + baseline;
+  const int band_h = swatch + 2 * pad, y0 = std::max(0, image.height - band_h);
+  cv::rectangle(m, cv::Rect(0, y0, std::min(image.width, swatch + size.width + 3 * pad), band_h), cv::Scalar(0, 0, 0), cv::FILLED);
+  // The swatch: the region colour's stripes over a darker base, the interface as a dark line below.
+  const int stripe = std::max(1, swatch / 5);
+  for (int y = 0; y < swatch; ++y)
+    for (int x = 0; x < swatch; ++x) {
+      const int px = pad + x, py = y0 + pad + y;
+      if (px >= image.width || py >= image.height) continue;
+      const bool interface = y >= swatch - std::max(1, swatch / 6);
+      const double w = interface ? 0.0 : ((x + y) / stripe) % 2 == 0 ? 1.0 : 0.5;
+      uint8_t* p = image.pixel(px, py);
+      for (int c = 0; c < 3; ++c) p[c] = static_cast<uint8_t>(std::lround(255.0 * std::clamp(double(rgb[c]), 0.0, 1.0) * w));
+    }
+  cv::putText(m, text, cv::Point(2 * pad + swatch, y0 + pad + size.height), cv::FONT_HERSHEY_SIMPLEX, scale,
+              cv::Scalar(255, 255, 255), thickness, cv::LINE_AA);
+}
+
 RgbImage side_by_side(const std::vector<RgbImage>& images) {
   if (images.empty()) throw InputError("side by side", "images", "none given");
   constexpr int kGap = 4;

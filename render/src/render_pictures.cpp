@@ -41,6 +41,18 @@ SceneFrame scene(const RenderModel& m, int64_t f) {
   return f >= 0 && m.trajectory ? trajectory_scene_frame(*m.trajectory, f) : rest_scene_frame(*m.surface);
 }
 
+// The legend of frame f's local region when it has one with any vertex in it: the run's region_nodes
+// metric (ctsurg-sim's FEM local region) when recorded, else the surface vertices it covers.
+std::string region_legend(const RenderModel& m, const SceneFrame& frame, int64_t f) {
+  if (!frame.region || f < 0 || !m.trajectory) return {};
+  int64_t vertices = 0;
+  for (int64_t v = 0; v < m.trajectory->vertex_count(); ++v) vertices += frame.region[v] > 0;
+  if (vertices == 0) return {};
+  if (const TrajectoryMetric* nodes = m.trajectory->metric("region_nodes"))
+    return "local region (" + std::to_string(std::llround(nodes->values[static_cast<std::size_t>(f)])) + " nodes)";
+  return "local region (" + std::to_string(vertices) + " vertices)";
+}
+
 void check_model(const RenderModel& m) {
   if (!m.surface) throw InputError("render", "surface", "none given");
   if (m.trajectory) check_trajectory_matches_surface(*m.trajectory, m.trajectory_name, *m.surface, m.surface_name);
@@ -188,17 +200,22 @@ void render_pictures(const RenderModel& model, const PictureRequest& request, co
     const std::string main_caption =
         (other ? stem(model.trajectory ? model.trajectory_name : model.surface_name) + ": " : std::string()) +
         frame_caption(model, f);
+    const std::string legend = request.style.region ? region_legend(model, main_scene, f) : std::string();
     if (request.layout == Layout::single) {
       picture.image = renderer.render(main_scene, camera, request.style);
       if (request.captions && (frames.size() > 1 || f >= 0) && request.turntable_steps == 0) draw_caption(picture.image, main_caption);
+      if (request.captions && !legend.empty()) draw_region_legend(picture.image, legend, request.style.region_rgb);
     } else if (request.layout == Layout::heat_map) {
       SceneFrame s = main_scene;
       s.values = heat_values(f);
       RenderStyle style = request.style;
       style.heat_map = true;
       style.heat_max_mm = static_cast<float>(heat_max);
+      // The region in white stripes over the heat colours: Turbo has no white, so no value reads as region.
+      style.region_rgb[0] = style.region_rgb[1] = style.region_rgb[2] = 1.0f;
       RgbImage img = renderer.render(s, camera, style);
       if (request.captions) draw_caption(img, main_caption);
+      if (request.captions && !legend.empty()) draw_region_legend(img, legend, style.region_rgb);
       const std::string title =
           other ? "difference from " + stem(request.reference.trajectory ? request.reference.trajectory_name
                                                                           : request.reference.surface_name) + " (mm)"
@@ -216,6 +233,7 @@ void render_pictures(const RenderModel& model, const PictureRequest& request, co
         RgbImage a = ref_renderer.render(ref_scene, camera, request.style);
         RgbImage b = renderer.render(main_scene, camera, request.style);
         if (request.captions) draw_caption(a, ref_caption), draw_caption(b, main_caption);
+        if (request.captions && !legend.empty()) draw_region_legend(b, legend, request.style.region_rgb);
         picture.image = side_by_side({a, b});
       } else {
         // Overlay: the reference in blue-grey, the model in tissue colour, averaged.
@@ -225,6 +243,7 @@ void render_pictures(const RenderModel& model, const PictureRequest& request, co
         RgbImage a = ref_renderer.render(ref_scene, camera, ref_style);
         RenderStyle main_style = request.style;
         main_style.tissue_rgb[0] = 0.95f, main_style.tissue_rgb[1] = 0.55f, main_style.tissue_rgb[2] = 0.2f;
+        main_style.region = false;  // averaged with the reference, stripes would only blur both shapes
         RgbImage b = renderer.render(main_scene, camera, main_style);
         picture.image = overlay(a, b);
         if (request.captions) draw_caption(picture.image, "blue: " + ref_caption + "  orange: " + main_caption);

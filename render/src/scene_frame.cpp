@@ -21,6 +21,7 @@ SceneFrame trajectory_scene_frame(const Trajectory& trajectory, int64_t f) {
   s.vertices = trajectory.frame_vertices(f);
   s.triangles = &trajectory.frame_triangles(f);
   s.topology = trajectory.topology_of_frame[static_cast<std::size_t>(f)];
+  s.region = trajectory.frame_region(f);
   if (!trajectory.closing_triangles.empty()) s.closing_triangles = trajectory.closing_triangles[static_cast<std::size_t>(s.topology)];
   const int64_t n_spheres = trajectory.sphere_count();
   for (int64_t i = 0; i < n_spheres && !trajectory.spheres.empty(); ++i) {

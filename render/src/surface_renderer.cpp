@@ -30,18 +30,21 @@ uniform samplerBuffer u_positions;  // RGB32F, LPS mm
 uniform samplerBuffer u_normals;    // RGB32F, unit
 uniform samplerBuffer u_tangents;   // RGBA32F, unit xyz + handedness
 uniform samplerBuffer u_values;     // R32F, heat-map value in mm
+uniform samplerBuffer u_region;     // RG32F, local region: (in the region, on its interface) as 0 / 1
 uniform mat4 u_view_projection;
 out vec3 v_world;
 out vec3 v_normal;
 out vec4 v_tangent;
 out vec2 v_uv;
 out float v_value;
+out vec2 v_region;
 void main() {
   vec3 p = texelFetch(u_positions, gl_VertexID).xyz;
   v_world = p;
   v_normal = texelFetch(u_normals, gl_VertexID).xyz;
   v_tangent = texelFetch(u_tangents, gl_VertexID);
   v_value = texelFetch(u_values, gl_VertexID).x;
+  v_region = texelFetch(u_region, gl_VertexID).xy;
   v_uv = a_uv;
   gl_Position = u_view_projection * vec4(p, 1.0);
 }
@@ -53,6 +56,7 @@ in vec3 v_normal;
 in vec4 v_tangent;
 in vec2 v_uv;
 in float v_value;
+in vec2 v_region;
 uniform sampler2D u_normal_map;  // tangent space, (n + 1) / 2, row 0 at v = 0
 uniform sampler1D u_colour_table;  // Turbo, 256 entries
 uniform bool u_use_normal_map;
@@ -65,6 +69,9 @@ uniform vec3 u_key;   // unit, towards the key light (LPS)
 uniform vec3 u_fill;  // unit, towards the fill light
 uniform vec3 u_tissue;
 uniform bool u_wound;  // triangles closing a cut's hole: the incision's inside, not skin
+uniform bool u_show_region;  // hatch the local region, darken its interface
+uniform vec3 u_region_rgb;
+uniform float u_hatch_px;    // stripe width, pixels
 out vec4 o_colour;
 void main() {
   vec3 n = normalize(v_normal);
@@ -87,6 +94,20 @@ void main() {
     // The inside, seen through a cut or closing one: a darker red.
     albedo = u_heat ? albedo * 0.7 : vec3(0.42, 0.06, 0.08);
     specular_strength = 0.1;
+  }
+  if (u_show_region) {
+    // Past halfway between a region vertex and an outside one: inside. The region in diagonal
+    // screen-space stripes of u_region_rgb (strong, weak), so what is under it (tissue, a heat value)
+    // still shows; the interface vertices' band on a darkened base; the region's edge (the halfway
+    // contour) a dark line about 1.5 pixels wide.
+    if (v_region.x > 0.5) {
+      // A heat map keeps its colours between the stripes (and under a lighter interface shade).
+      float stripe = mod(gl_FragCoord.x + gl_FragCoord.y, 2.0 * u_hatch_px) < u_hatch_px ? (u_heat ? 0.5 : 0.65) : (u_heat ? 0.0 : 0.3);
+      if (v_region.y > 0.5) albedo *= u_heat ? 0.7 : 0.45;
+      albedo = mix(albedo, u_region_rgb, stripe);
+    }
+    float edge = abs(v_region.x - 0.5) / max(fwidth(v_region.x), 1e-6);
+    if (edge < 0.75) albedo *= 0.15;
   }
   vec3 to_eye = u_orthographic ? -u_forward : normalize(u_eye - v_world);
   float diffuse = 0.72 * max(dot(n, u_key), 0.0) + 0.28 * max(dot(n, u_fill), 0.0) + 0.16;
@@ -215,7 +236,7 @@ struct SurfaceRenderer::State {
   bool has_normal_map = false;
   GLuint surface_program = 0, tool_program = 0;
   GLuint surface_vao = 0, uv_buffer = 0, normal_map = 0, colour_table = 0;
-  BufferTexture positions, normals, tangents, values;
+  BufferTexture positions, normals, tangents, values, region;
   struct IndexBuffer {
     GLuint buffer = 0;
     GLsizei count = 0;
@@ -226,7 +247,7 @@ struct SurfaceRenderer::State {
   GLuint sphere_vao = 0, sphere_vbo = 0, sphere_ebo = 0;
   GLsizei sphere_indices = 0;
   GLuint blade_vao = 0, blade_vbo = 0;
-  std::vector<float> normal_scratch, tangent_scratch, zero_values;
+  std::vector<float> normal_scratch, tangent_scratch, zero_values, region_scratch;
 
   State(const SurfaceMesh& surface, int width, int height, int samples)
       : context(width, height, samples), frames(surface) {}
@@ -255,6 +276,7 @@ SurfaceRenderer::SurfaceRenderer(const SurfaceMesh& surface, int width, int heig
   s.normals.create(GL_RGB32F);
   s.tangents.create(GL_RGBA32F);
   s.values.create(GL_R32F);
+  s.region.create(GL_RG32F);
   s.zero_values.assign(static_cast<std::size_t>(s.vertex_count), 0.0f);
   s.weld.resize(static_cast<std::size_t>(s.vertex_count));
   for (std::size_t v = 0; v < s.weld.size(); ++v) s.weld[v] = static_cast<uint32_t>(v);
@@ -336,6 +358,7 @@ SurfaceRenderer::~SurfaceRenderer() {
   s.normals.destroy();
   s.tangents.destroy();
   s.values.destroy();
+  s.region.destroy();
   const GLuint buffers[] = {s.uv_buffer, s.sphere_vbo, s.sphere_ebo, s.blade_vbo};
   glDeleteBuffers(4, buffers);
   const GLuint textures[] = {s.normal_map, s.colour_table};
@@ -366,6 +389,15 @@ void SurfaceRenderer::draw(const SceneFrame& frame, const Camera& camera, const 
   s.tangents.stream(s.tangent_scratch.data(), 4 * nv * sizeof(float));
   const std::vector<float>& values = frame.values.empty() ? s.zero_values : frame.values;
   s.values.stream(values.data(), nv * sizeof(float));
+  const bool show_region = style.region && frame.region;
+  if (show_region) {
+    s.region_scratch.resize(2 * nv);
+    for (std::size_t v = 0; v < nv; ++v) {
+      s.region_scratch[2 * v] = frame.region[v] >= 1 ? 1.0f : 0.0f;
+      s.region_scratch[2 * v + 1] = frame.region[v] == 2 ? 1.0f : 0.0f;
+    }
+    s.region.stream(s.region_scratch.data(), 2 * nv * sizeof(float));
+  }
   auto ib = s.index_buffers.find(frame.topology);
   if (ib == s.index_buffers.end()) {
     GLuint buffer = 0;
@@ -424,6 +456,7 @@ void SurfaceRenderer::draw(const SceneFrame& frame, const Camera& camera, const 
   bind_buffer_texture("u_normals", 1, s.normals);
   bind_buffer_texture("u_tangents", 2, s.tangents);
   bind_buffer_texture("u_values", 3, s.values);
+  bind_buffer_texture("u_region", 6, s.region);
   glActiveTexture(GL_TEXTURE4);
   glBindTexture(GL_TEXTURE_2D, s.normal_map);
   glUniform1i(glGetUniformLocation(p, "u_normal_map"), 4);
@@ -440,6 +473,9 @@ void SurfaceRenderer::draw(const SceneFrame& frame, const Camera& camera, const 
   glUniform3fv(glGetUniformLocation(p, "u_key"), 1, key.data());
   glUniform3fv(glGetUniformLocation(p, "u_fill"), 1, fill.data());
   glUniform3fv(glGetUniformLocation(p, "u_tissue"), 1, style.tissue_rgb);
+  glUniform1i(glGetUniformLocation(p, "u_show_region"), show_region);
+  glUniform3fv(glGetUniformLocation(p, "u_region_rgb"), 1, style.region_rgb);
+  glUniform1f(glGetUniformLocation(p, "u_hatch_px"), std::max(3.0f, std::round(float(s.context.height()) / 96.0f)));
   glUniformMatrix4fv(glGetUniformLocation(p, "u_view_projection"), 1, GL_FALSE, vp.data());
   glBindVertexArray(s.surface_vao);
   glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, ib->second.buffer);

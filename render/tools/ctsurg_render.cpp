@@ -57,7 +57,7 @@ int main(int argc, char** argv) {
   std::string size_spec = "512";
   int samples = 4, turntable = 0;
   double heat_max = 0.0, fps = 10.0;
-  bool no_normal_map = false, no_tools = false, no_captions = false;
+  bool no_normal_map = false, no_tools = false, no_captions = false, no_region = false;
   return ctsurg::run_tool(
       argc, argv, "ctsurg-render",
       "Render a surface file (ctsurg-surface / ctsurg-normalmap) or the frames of a trajectory simulated on it "
@@ -104,7 +104,10 @@ int main(int argc, char** argv) {
         app.add_option("--fps", fps, "Animation frames per second")->capture_default_str()->check(CLI::Range(0.1, 120.0));
         app.add_flag("--no-normal-map", no_normal_map, "Ignore the surface's normal map (geometry normals only)");
         app.add_flag("--no-tools", no_tools, "Do not draw the trajectory's spheres and blades");
-        app.add_flag("--no-captions", no_captions, "No frame and model captions on the pictures");
+        app.add_flag("--no-captions", no_captions, "No frame and model captions (and no region legend) on the pictures");
+        app.add_flag("--no-region", no_region,
+                     "Do not draw the FEM local region (/trajectory/surface/vertex_region: drawn by default when the "
+                     "trajectory has it, hatched with its interface dark, in single, side-by-side and heat-map pictures)");
       },
       [&](const ctsurg::ToolContext&) {
         const auto start = std::chrono::steady_clock::now();
@@ -143,6 +146,7 @@ int main(int argc, char** argv) {
         request.captions = !no_captions;
         request.style.normal_map = !no_normal_map;
         request.style.tools = !no_tools;
+        request.style.region = !no_region;
         if (!animation.empty()) ctsurg::check_animation_output(animation);
 
         // Inputs.

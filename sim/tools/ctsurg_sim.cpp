@@ -23,7 +23,7 @@
 namespace fs = std::filesystem;
 
 int main(int argc, char** argv) {
-  std::string scenario_path, output, grid, surface, tetmesh, backend;
+  std::string scenario_path, output, grid, surface, tetmesh, centerline, backend;
   int threads = -1;
   bool describe = false, force = false;
   // Longer runs ask for --force: an hour of this machine, estimated from the run's first second.
@@ -41,6 +41,7 @@ int main(int argc, char** argv) {
         app.add_option("--grid", grid, "Occupancy grid file (overrides model.grid)");
         app.add_option("--surface", surface, "Surface file (overrides model.surface)");
         app.add_option("--tetmesh", tetmesh, "Tet mesh file (overrides model.tetmesh)");
+        app.add_option("--centerline", centerline, "Centerline file (overrides model.centerline; kind vessel)");
         app.add_option("--backend", backend, "cpu, cuda or auto (overrides backend)")->check(CLI::IsMember({"cpu", "cuda", "auto"}));
         app.add_flag("--describe", describe,
                      "Print what the scenario reads and writes (model, input files, trajectory, render requests) as JSON "
@@ -55,6 +56,7 @@ int main(int argc, char** argv) {
         if (!grid.empty()) s.grid = grid;
         if (!surface.empty()) s.surface = surface;
         if (!tetmesh.empty()) s.tetmesh = tetmesh;
+        if (!centerline.empty()) s.centerline = centerline;
         if (!backend.empty()) s.backend = backend;
         if (threads >= 0) s.threads = threads;
         if (describe) {
@@ -70,6 +72,7 @@ int main(int argc, char** argv) {
         if (read.grid) inputs.push_back(s.grid);
         if (read.surface) inputs.push_back(s.surface);
         if (read.tetmesh) inputs.push_back(s.tetmesh);
+        if (read.centerline) inputs.push_back(s.centerline);
         ctsurg::check_output_paths({s.trajectory, ctsurg::xdmf_path_for(s.trajectory)}, inputs);
         spdlog::info("sim: scenario '{}' ({}), {} s, {} tool(s)", s.name, ctsurg::sim::to_string(s.model), s.duration_s,
                      s.tools.size());
@@ -110,6 +113,7 @@ int main(int argc, char** argv) {
         if (read.grid) provenance.add_input(s.grid);
         if (read.surface) provenance.add_input(s.surface);
         if (read.tetmesh) provenance.add_input(s.tetmesh);
+        if (read.centerline) provenance.add_input(s.centerline);
         ctsurg::write_trajectory_file(s.trajectory, traj, provenance);
         spdlog::info("sim: wrote {} ({} frames, {} vertices)", s.trajectory.string(), traj.frame_count(), traj.vertex_count());
       });

@@ -7,6 +7,8 @@
 
 #include <gtest/gtest.h>
 
+#include <hdf5.h>
+
 #include <cmath>
 #include <fstream>
 #include <limits>
@@ -265,4 +267,69 @@ TEST(TrajectoryFile, InstrumentsRoundTripAndAreChecked) {
   bad = t;
   bad.instruments[0].vertices[0] = std::numeric_limits<float>::infinity();
   refused(bad, "/trajectory/tools/instruments/0/vertices");
+}
+
+// The FEM local region: (F, V) flags round-trip (and reach the XDMF sidecar as a scalar attribute); a
+// file without them reads as empty; a wrong shape or a flag above 2 is refused naming the dataset, by
+// the writer and by the reader (a file another writer changed).
+TEST(TrajectoryFile, VertexRegionRoundTripsAndIsChecked) {
+  TempDir dir;
+  auto t = three_frames(false);
+  t.vertex_region = {0, 0, 0, 0,  //
+                     1, 2, 0, 0,  //
+                     1, 1, 2, 0};
+  ctsurg::write_trajectory_file(dir.path() / "r.h5", t, test_provenance());
+  const auto r = ctsurg::read_trajectory_file(dir.path() / "r.h5");
+  EXPECT_EQ(r.vertex_region, t.vertex_region);
+  ASSERT_NE(r.frame_region(2), nullptr);
+  EXPECT_EQ(r.frame_region(2)[2], 2);
+  const std::string x = read_text(dir.path() / "r.xdmf");
+  EXPECT_NE(x.find("Name=\"local_region\""), std::string::npos);
+  EXPECT_NE(x.find("r.h5:/trajectory/surface/vertex_region"), std::string::npos);
+  // Without it (as every run without a local region, and files from before): empty, no attribute.
+  ctsurg::write_trajectory_file(dir.path() / "none.h5", three_frames(false), test_provenance());
+  const auto none = ctsurg::read_trajectory_file(dir.path() / "none.h5");
+  EXPECT_TRUE(none.vertex_region.empty());
+  EXPECT_EQ(none.frame_region(0), nullptr);
+  EXPECT_EQ(read_text(dir.path() / "none.xdmf").find("local_region"), std::string::npos);
+
+  auto bad = t;
+  bad.vertex_region.pop_back();
+  refused(bad, "/trajectory/surface/vertex_region");
+  bad = t;
+  bad.vertex_region[5] = 3;
+  refused(bad, "/trajectory/surface/vertex_region");
+  EXPECT_THROW(ctsurg::write_trajectory_file(dir.path() / "bad.h5", bad, test_provenance()), ctsurg::InputError);
+  EXPECT_FALSE(fs::exists(dir.path() / "bad.h5"));
+
+  const auto read_refused = [&](const fs::path& path, const std::string& why) {
+    try {
+      ctsurg::read_trajectory_file(path);
+      ADD_FAILURE() << "read " << why;
+    } catch (const ctsurg::InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("/trajectory/surface/vertex_region"), std::string::npos) << why << ": " << e.what();
+    }
+  };
+  {  // another writer puts a flag 7 into the file (HDF5 recomputes its checksum)
+    const hid_t file = H5Fopen((dir.path() / "r.h5").c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
+    const hid_t ds = H5Dopen2(file, "/trajectory/surface/vertex_region", H5P_DEFAULT);
+    std::vector<uint8_t> flags = t.vertex_region;
+    flags[9] = 7;
+    ASSERT_GE(H5Dwrite(ds, H5T_NATIVE_UINT8, H5S_ALL, H5S_ALL, H5P_DEFAULT, flags.data()), 0);
+    H5Dclose(ds);
+    H5Fclose(file);
+  }
+  read_refused(dir.path() / "r.h5", "a flag 7");
+  {  // ... or replaces it with one of (F, V + 1)
+    const hid_t file = H5Fopen((dir.path() / "none.h5").c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
+    const hsize_t dims[2] = {3, 5};
+    const hid_t space = H5Screate_simple(2, dims, nullptr);
+    const hid_t ds = H5Dcreate2(file, "/trajectory/surface/vertex_region", H5T_NATIVE_UINT8, space, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+    const std::vector<uint8_t> flags(15, 1);
+    ASSERT_GE(H5Dwrite(ds, H5T_NATIVE_UINT8, H5S_ALL, H5S_ALL, H5P_DEFAULT, flags.data()), 0);
+    H5Dclose(ds);
+    H5Sclose(space);
+    H5Fclose(file);
+  }
+  read_refused(dir.path() / "none.h5", "a (3, 5) region for 4 vertices");
 }

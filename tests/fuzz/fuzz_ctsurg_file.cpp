@@ -1,6 +1,7 @@
 // libFuzzer target: one ctsurg HDF5 file through its reader (libhdf5 with checksums, then ctsurg's
 // format, shape, index, geometry and finiteness checks). CTSURG_FUZZ_READER picks the reader:
-// built five times, fuzz_hu_volume_file .. fuzz_trajectory_file.
+// built six times, fuzz_hu_volume_file .. fuzz_trajectory_file and fuzz_centerline_file.
+#include "ctsurg/core/centerline_file.h"
 #include "ctsurg/core/hu_volume_file.h"
 #include "ctsurg/core/occupancy_grid_file.h"
 #include "ctsurg/core/surface_mesh_file.h"

@@ -8,7 +8,7 @@ out=$2
 root=$(cd "$(dirname "$0")/../.." && pwd)
 rm -rf "$out"
 mkdir -p "$out"/{fuzz_nifti,fuzz_nrrd,fuzz_metaimage,fuzz_dicom_folder,fuzz_scenario}
-mkdir -p "$out"/{fuzz_hu_volume_file,fuzz_occupancy_grid_file,fuzz_surface_mesh_file,fuzz_tet_mesh_file,fuzz_trajectory_file}
+mkdir -p "$out"/{fuzz_hu_volume_file,fuzz_occupancy_grid_file,fuzz_surface_mesh_file,fuzz_tet_mesh_file,fuzz_trajectory_file,fuzz_centerline_file}
 mkdir -p "$out"/{fuzz_stl,fuzz_obj,fuzz_ply}
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
@@ -50,6 +50,11 @@ cp "$work/surface.h5" "$out/fuzz_surface_mesh_file/"
 cp "$work/tetmesh.h5" "$out/fuzz_tet_mesh_file/"
 cp "$work/trajectory.h5" "$out/fuzz_trajectory_file/"
 cp "$work/pull.yaml" "$out/fuzz_scenario/"
+# A centerline: a torus' label mask, its loop cut at the thinnest point.
+"$bin/ctsurg-phantom" $q torus "$work/torus.nii.gz" --major-mm 10 --minor-mm 3 --spacing-mm 1.5 --supersample 1 \
+  --label-out "$work/ring.nii.gz"
+"$bin/ctsurg-centerline" $q "$work/ring.nii.gz" --break-loops -o "$work/centerline.h5"
+cp "$work/centerline.h5" "$out/fuzz_centerline_file/"
 
 python3 "$root/tests/fuzz/make_dicom_seed.py" "$out/fuzz_dicom_folder/two_slices.bin"
 echo "fuzz seeds: $(find "$out" -type f | wc -l) files, $(du -sk "$out" | cut -f1) KiB in $out"

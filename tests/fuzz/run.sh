@@ -11,12 +11,12 @@ seconds=${1:-10}
 shift || true
 cmake --preset fuzz >/dev/null
 cmake --build --preset fuzz
-[[ -x build/bin/ctsurg-phantom ]] || scripts/build.sh
+[[ -x build/bin/ctsurg-phantom && -x build/bin/ctsurg-centerline ]] || scripts/build.sh
 tests/fuzz/make_seeds.sh build/bin build-fuzz/seeds
 targets=("$@")
 if ((${#targets[@]} == 0)); then
   targets=(fuzz_nifti fuzz_nrrd fuzz_metaimage fuzz_dicom_folder fuzz_scenario fuzz_hu_volume_file
-           fuzz_occupancy_grid_file fuzz_surface_mesh_file fuzz_tet_mesh_file fuzz_trajectory_file fuzz_stl fuzz_obj fuzz_ply)
+           fuzz_occupancy_grid_file fuzz_surface_mesh_file fuzz_tet_mesh_file fuzz_trajectory_file fuzz_centerline_file fuzz_stl fuzz_obj fuzz_ply)
 fi
 mkdir -p build-fuzz/findings build-fuzz/logs
 # Third-party leaks on error paths are suppressed (tests/fuzz/lsan.supp says which and why).

@@ -270,3 +270,79 @@ TEST_F(RenderPictures, ActiveInstrumentsAreDrawnInSteel) {
   const ctsurg::RgbImage inactive = render_one(surface, &t, 1), plain = render_one(surface, &trajectory, 1);
   EXPECT_EQ(inactive.rgb, plain.rgb);
 }
+
+// The FEM local region (/trajectory/surface/vertex_region): in frame 1 the vertices with x > 8 mm (the
+// picture's right half, anterior view) are the region and those with 4 < x <= 8 its interface. The
+// single picture changes only right of the centre, mostly towards cyan (the stripes), with a dark
+// interface band; the heat map likewise. All flags 0, or RenderStyle::region off, draw the same pixels
+// as a trajectory without a region; the legend (captions on) names the run's region_nodes.
+TEST_F(RenderPictures, LocalRegionIsHatchedWhereItIsAndNowhereElse) {
+  const int64_t nv = trajectory.vertex_count();
+  ctsurg::Trajectory t = trajectory;
+  t.vertex_region.assign(static_cast<size_t>(3 * nv), 0);
+  ctsurg::Trajectory zeros = t;
+  for (int64_t v = 0; v < nv; ++v) {
+    const float x = surface.vertices[static_cast<size_t>(3 * v)];
+    t.vertex_region[static_cast<size_t>(nv + v)] = x > 8.0f ? 1 : x > 4.0f ? 2 : 0;
+  }
+  EXPECT_EQ(ctsurg::trajectory_scene_frame(trajectory, 1).region, nullptr);
+  EXPECT_EQ(ctsurg::trajectory_scene_frame(t, 1).region, t.vertex_region.data() + nv);
+
+  // Pixels that differ, and that all of them lie right of the rendered view's centre column (a heat map's
+  // colour bar is appended on the right).
+  const auto check_right_only = [&](const ctsurg::RgbImage& with, const ctsurg::RgbImage& without, const char* what) {
+    int64_t changed = 0, left = 0, cyan = 0, dark = 0;
+    for (int y = 0; y < with.height; ++y)
+      for (int x = 0; x < with.width; ++x) {
+        const uint8_t* a = with.pixel(x, y);
+        const uint8_t* b = without.pixel(x, y);
+        if (std::abs(a[0] - b[0]) + std::abs(a[1] - b[1]) + std::abs(a[2] - b[2]) <= 12) continue;
+        ++changed;
+        left += x < kSize / 2;
+        cyan += a[2] > a[0] + 20 && a[1] > a[0] + 20;
+        dark += a[0] + a[1] + a[2] + 30 < b[0] + b[1] + b[2];
+      }
+    EXPECT_GT(changed, with.width * with.height / 20) << what;
+    EXPECT_EQ(left, 0) << what << ": the region is right of the centre";
+    EXPECT_GT(dark, 20) << what << ": the interface band";
+    return cyan;
+  };
+  const ctsurg::RgbImage plain = render_one(surface, &trajectory, 1), region = render_one(surface, &t, 1);
+  const int64_t cyan = check_right_only(region, plain, "single");
+  EXPECT_GT(cyan, kSize * kSize / 40) << "the stripes are cyan over the red tissue";
+  const ctsurg::RgbImage heat_plain = render_one(surface, &trajectory, 1, ctsurg::Layout::heat_map);
+  const ctsurg::RgbImage heat_region = render_one(surface, &t, 1, ctsurg::Layout::heat_map);
+  check_right_only(heat_region, heat_plain, "heat map");
+  if (const char* dump = std::getenv("CTSURG_DUMP_REGION")) {  // to look at them
+    for (const auto& [name, img] : {std::pair{"region_single.png", &region}, std::pair{"region_heat.png", &heat_region}}) {
+      const std::vector<uint8_t> png = ctsurg::encode_png(*img);
+      std::ofstream(fs::path(dump) / name, std::ios::binary).write(reinterpret_cast<const char*>(png.data()), std::streamsize(png.size()));
+    }
+  }
+
+  // No region drawn: byte-identical to a trajectory without one.
+  EXPECT_EQ(render_one(surface, &zeros, 1).rgb, plain.rgb) << "all flags 0";
+  EXPECT_EQ(render_one(surface, &t, 0).rgb, render_one(surface, &trajectory, 0).rgb) << "frame 0 has no region";
+  {
+    ctsurg::RenderModel model{&surface, "organ.h5", &t, "organ_trajectory.h5"};
+    ctsurg::PictureRequest request;
+    request.width = request.height = kSize;
+    request.view = ctsurg::parse_view("anterior");
+    request.frames = {1};
+    request.captions = false;
+    request.style.region = false;
+    ctsurg::render_pictures(model, request, [&](ctsurg::Picture&& p) { EXPECT_EQ(p.image.rgb, plain.rgb) << "region off"; });
+    // The legend at the bottom-left (captions on): only there, and only with a region.
+    t.metrics.push_back({"region_nodes", "1", {0, 123, 0}});
+    request.style.region = true;
+    request.captions = true;
+    ctsurg::RgbImage with_legend, without_legend;
+    ctsurg::render_pictures(model, request, [&](ctsurg::Picture&& p) { with_legend = std::move(p.image); });
+    model.trajectory = &trajectory;
+    ctsurg::render_pictures(model, request, [&](ctsurg::Picture&& p) { without_legend = std::move(p.image); });
+    int64_t legend = 0;
+    for (int y = kSize * 3 / 4; y < kSize; ++y)
+      for (int x = 0; x < kSize / 2; ++x) legend += with_legend.pixel(x, y)[0] != without_legend.pixel(x, y)[0];
+    EXPECT_GT(legend, 50) << "the legend's band at the bottom-left";
+  }
+}

@@ -65,7 +65,12 @@ if [[ -f "$ROOT/../shared/data/abdomen/upper_abdomen_ct.nii.gz" && -f "$ROOT/../
     fail "abdomen: ctsurg-render was given a surface"
   fi
   echo "ok: abdomen plan: $got"
+  # The aorta (the vessel model): its centerline from the mask, then the runs and pictures; no CT import,
+  # grid, surface or tet mesh.
+  got=$(mk -n aorta PATIENTS_DIR="$ROOT/data_samples/patients" OUT="$WORK/bundled" | grep -o 'ctsurg-[a-z]*' | sort -u | tr '\n' ' ')
+  [[ "$got" == "ctsurg-centerline ctsurg-render ctsurg-sim " ]] || fail "aorta: [$got]"
+  echo "ok: aorta plan: $got"
 else
-  echo "skipped: kidney, head and abdomen plans (../shared/data absent)"
+  echo "skipped: kidney, head, abdomen and aorta plans (../shared/data absent)"
 fi
 echo "PASS"

@@ -105,6 +105,16 @@ FemEngine::FemEngine(FemModel model, FemBoundaryConditions supports, EmbeddedSur
   if (options_.contact.enabled && options_.solver != FemSolver::dynamic) {
     throw InputError(options_.where, "contact", "contact needs solver: dynamic (it is part of the explicit dynamics)");
   }
+  if (options_.local_region_mm) {
+    const double r = *options_.local_region_mm;
+    if (!(r > 0) || !std::isfinite(r)) {
+      throw InputError(options_.where, "local_region", "radius_mm must be a positive number of mm (got " + std::to_string(r) + ")");
+    }
+    if (options_.solver != FemSolver::static_equilibrium) {
+      throw InputError(options_.where, "local_region", "a local region needs solver: static (it couples quasi-static solves)");
+    }
+    if (model_.order != 1) throw InputError(options_.where, "local_region", "a local region needs linear (4-node) tets");
+  }
   make_solvers();
   if (options_.contact.enabled) {
     std::vector<int32_t> piece;
@@ -152,6 +162,7 @@ void FemEngine::make_solvers() {
   // Newton with conjugate gradients per frame.
   linear_.reset();
   static_solver_.reset();
+  local_.reset();
   if (supports_.fixed_nodes.empty() && supports_.fixed_components.empty()) {
     throw InputError(options_.where, "fixed", "a static FEM problem needs fixed nodes (the system is singular otherwise)");
   }
@@ -166,6 +177,25 @@ void FemEngine::make_solvers() {
       supported[3 * static_cast<size_t>(n) + 2] = 1;
   for (const int32_t c : supports_.fixed_components) supported[static_cast<size_t>(c)] = 1;
   const bool supports_hold = free_rigid_modes(model_, supported, fem_bounding_diagonal(model_)).empty();
+  if (options_.local_region_mm) {
+    // The region's Newton solves with the model's law; the rest from the linear model, factorised once.
+    if (!supports_hold) {
+      throw InputError(options_.where, "local_region", "the global linear model of a local region is factorised once, so the fixed "
+                                                       "regions alone must hold the model (no rigid motion left to a grab)");
+    }
+    FemLocalRegionOptions lo;
+    lo.radius_mm = *options_.local_region_mm;
+    lo.newton = newton;
+    lo.linear.threads = options_.threads;
+    lo.balance_iterations = options_.local_region_balance_iterations;
+    local_ = std::make_unique<FemLocalRegionSolver>(model_, bc_, lo, backend_);
+    if (options_.note) {
+      options_.note("FEM local region: Newton within " + std::to_string(lo.radius_mm) + " mm (geodesic) of the tools' nodes, the rest linear (" +
+                    std::to_string(local_->linear_stats().factor_nonzeros) + " non-zeros factorised once, " +
+                    std::to_string(local_->linear_stats().factor_seconds) + " s)");
+    }
+    return;
+  }
   if (model_.material.model == FemMaterialModel::linear && model_.order == 1 && newton.linear_solve != FemLinearSolve::iterative &&
       supports_hold) {
     FemLinearSolverOptions lo;
@@ -342,6 +372,10 @@ constexpr int32_t kMaxBodyMetrics = 16;
 
 std::vector<std::pair<std::string, std::string>> FemEngine::extra_metrics() const {
   std::vector<std::pair<std::string, std::string>> names{{"newton_iterations", "1"}, {"cg_iterations", "1"}, {"element_volume", "mm^3"}, {"nodes", "1"}};
+  if (local_) {
+    for (const char* n : {"region_nodes", "region_tets", "interface_nodes"}) names.emplace_back(n, "1");
+    names.emplace_back("interface_residual", "uN");
+  }
   // With contact: the deepest penetration between the surfaces (fem_contact.h) and each body's element
   // volume (up to 16 bodies).
   if (options_.contact.enabled) {
@@ -427,7 +461,14 @@ void FemEngine::equilibrium(const std::vector<ToolInput>& tools, double time) {
   loads.gravity = options_.gravity;
   loads.forces = holds_.nodal_forces();
   FemStaticResult r;
-  if (linear_) {
+  if (local_) {
+    // The region grows from every node a tool holds or loads.
+    seeds_ = grab_nodes_;
+    const std::vector<double>& f = holds_.nodal_forces();
+    for (size_t i = 0; i < f.size(); i += 3)
+      if (f[i] != 0 || f[i + 1] != 0 || f[i + 2] != 0) seeds_.push_back(static_cast<int32_t>(i / 3));
+    r = local_->solve(grab_nodes_, grab_displacements_, loads, seeds_, solves_ > 0 ? &u_ : nullptr);
+  } else if (linear_) {
     r = linear_->solve(grab_nodes_, grab_displacements_, loads);
   } else {
     bc_.prescribed_nodes = grab_nodes_;
@@ -519,6 +560,26 @@ void FemEngine::surface_vertices(std::vector<float>& xyz) {
   surface_.move(positions_, rest_real_, xyz, options_.threads);
 }
 
+bool FemEngine::surface_vertex_region(std::vector<uint8_t>& flags) const {
+  if (!local_) return false;
+  const std::vector<uint8_t>& nodes = local_->node_region();
+  const size_t nn = static_cast<size_t>(model_.node_count());
+  const bool solved = nodes.size() == nn;  // none before the first solve
+  const auto node_flag = [&](int32_t n) { return solved && n >= 0 ? nodes[static_cast<size_t>(n)] : uint8_t{0}; };
+  if (surface_.empty()) {
+    flags.resize(nn);
+    for (size_t i = 0; i < nn; ++i) flags[i] = node_flag(static_cast<int32_t>(i));
+    return true;
+  }
+  // Each vertex's ties are its tet's corners (tet_embedding.h; relinked to a split node's copy after a cut).
+  const SurfaceCoupling& c = surface_.coupling();
+  const size_t nv = static_cast<size_t>(surface_.vertex_count());
+  flags.assign(nv, 0);
+  for (size_t v = 0; v < nv; ++v)
+    for (size_t k = 0; k < 8; ++k) flags[v] = std::max(flags[v], node_flag(c.particles[8 * v + k]));
+  return true;
+}
+
 EngineMetrics FemEngine::metrics() const {
   EngineMetrics m;
   m.kinetic_energy = dynamics_ ? dynamics_->kinetic_energy() : implicit_ ? implicit_->kinetic_energy() : 0.0;
@@ -550,6 +611,11 @@ EngineMetrics FemEngine::metrics() const {
     }
   }
   m.extra = {static_cast<double>(newton_), static_cast<double>(cg_), volume, static_cast<double>(model_.node_count())};
+  if (local_) {
+    const FemLocalRegionReport& lr = local_->report();
+    m.extra.insert(m.extra.end(), {static_cast<double>(lr.region_nodes), static_cast<double>(lr.region_tets),
+                                   static_cast<double>(lr.interface_nodes), lr.interface_residual});
+  }
   if (options_.contact.enabled) {
     const FemContact* contact = dynamics_ ? dynamics_->contact() : nullptr;
     const std::vector<Real> u(u_.begin(), u_.end());

@@ -126,21 +126,37 @@ ToolAction suture_of(const YamlField& f, const std::string& label) {
   return t;
 }
 
-ToolAction tool_of(const YamlField& item, const fs::path& base_dir) {
-  if (!item.is_map()) item.fail("expected one of grab:, probe:, cut:, force:, instrument:, suture: with the tool's fields under it");
+ToolAction tool_of(const YamlField& item, const fs::path& base_dir, bool grab_rotation) {
+  if (!item.is_map()) item.fail("expected one of grab:, clamp:, probe:, cut:, force:, instrument:, suture: with the tool's fields under it");
   int kinds = 0;
   ToolAction t;
   std::string key;
-  for (const char* k : {"grab", "probe", "cut", "force", "instrument", "suture"}) {
+  for (const char* k : {"grab", "clamp", "probe", "cut", "force", "instrument", "suture"}) {
     if (item.has(k)) {
       ++kinds;
       key = k;
     }
   }
-  item.only({"grab", "probe", "cut", "force", "instrument", "suture"});
-  if (kinds != 1) item.fail("each tool is exactly one of grab:, probe:, cut:, force:, instrument:, suture:");
+  item.only({"grab", "clamp", "probe", "cut", "force", "instrument", "suture"});
+  if (kinds != 1) item.fail("each tool is exactly one of grab:, clamp:, probe:, cut:, force:, instrument:, suture:");
   const YamlField f = item.child(key);
   if (key == "suture") return suture_of(f, item.path() + " (suture)");
+  if (key == "clamp") {
+    // A clamp: a grab that stays where it is put (one keyframe), pinning what it captures for its window.
+    f.only({"start_s", "end_s", "radius_mm", "position_mm", "at_fraction", "snap_to_tissue"});
+    t.kind = ToolKind::grab;
+    t.label = item.path() + " (clamp)";
+    t.radius_mm = f.child("radius_mm").positive();
+    t.start_s = f.has("start_s") ? f.child("start_s").non_negative() : 0.0;
+    t.end_s = f.has("end_s") ? f.child("end_s").positive() : std::numeric_limits<double>::infinity();
+    if (!(t.end_s > t.start_s)) f.child("end_s").fail("must be after start_s");
+    Keyframe k;
+    k.t = t.start_s;
+    k.point = point_of(f, false);
+    t.path.push_back(k);
+    if (f.has("snap_to_tissue")) t.snap_to_tissue = f.child("snap_to_tissue").boolean();
+    return t;
+  }
   t.kind = key == "grab"    ? ToolKind::grab
            : key == "probe" ? ToolKind::probe
            : key == "cut"   ? ToolKind::cut
@@ -168,7 +184,7 @@ ToolAction tool_of(const YamlField& item, const fs::path& base_dir) {
   const auto keys = f.child("path").items();
   if (keys.empty()) f.child("path").fail("needs at least one keyframe");
   for (size_t i = 0; i < keys.size(); ++i) {
-    if (t.kind == ToolKind::instrument) {
+    if (t.kind == ToolKind::instrument || t.kind == ToolKind::grab) {
       keys[i].only({"t", "position_mm", "at_fraction", "offset_mm", "quaternion", "rotation"});
     } else {
       keys[i].only({"t", "position_mm", "at_fraction", "offset_mm"});
@@ -178,6 +194,10 @@ ToolAction tool_of(const YamlField& item, const fs::path& base_dir) {
     if (i > 0 && !(k.t > t.path.back().t)) keys[i].child("t").fail("keyframe times must increase");
     k.point = point_of(keys[i], i > 0);
     k.rotation = rotation_of(keys[i]);
+    if (t.kind == ToolKind::grab && !grab_rotation && k.rotation && rotation_angle_deg(*k.rotation) > 1e-9) {
+      keys[i].child(keys[i].has("rotation") ? "rotation" : "quaternion")
+          .fail("a grab turns what it holds only for kind: vessel (the other models grab points, not frames)");
+    }
     t.path.push_back(k);
   }
   t.start_s = f.has("start_s") ? f.child("start_s").non_negative() : t.path.front().t;
@@ -239,7 +259,7 @@ FixedRegionSpec fixed_of(const YamlField& item) {
 }
 
 SolverSpec solver_of(const YamlField& f) {
-  f.only({"linear", "tolerance_mm", "max_newton_iterations", "max_cg_iterations"});
+  f.only({"linear", "tolerance_mm", "max_newton_iterations", "max_cg_iterations", "local_region"});
   SolverSpec s;
   if (f.has("linear")) {
     const std::string kind = f.child("linear").one_of({"auto", "direct", "iterative"});
@@ -251,13 +271,19 @@ SolverSpec solver_of(const YamlField& f) {
   }
   if (f.has("max_newton_iterations")) s.max_newton_iterations = static_cast<int>(f.child("max_newton_iterations").integer(1, 1000));
   if (f.has("max_cg_iterations")) s.max_cg_iterations = static_cast<int>(f.child("max_cg_iterations").integer(0, 100000000));
+  if (f.has("local_region")) {
+    const YamlField r = f.child("local_region");
+    r.only({"radius_mm", "balance_iterations"});
+    s.local_region_mm = r.child("radius_mm").positive();
+    if (r.has("balance_iterations")) s.local_region_balance = static_cast<int>(r.child("balance_iterations").integer(0, 100));
+  }
   return s;
 }
 
 }  // namespace
 
 const char* to_string(ModelKind kind) {
-  return kind == ModelKind::spring_grid ? "spring_grid" : kind == ModelKind::fem ? "fem" : "explicit_springs";
+  return kind == ModelKind::spring_grid ? "spring_grid" : kind == ModelKind::fem ? "fem" : kind == ModelKind::vessel ? "vessel" : "explicit_springs";
 }
 
 std::string describe_scenario(const Scenario& s) {
@@ -269,11 +295,16 @@ std::string describe_scenario(const Scenario& s) {
     j["solver"] = s.fem_solver == FemSolver::dynamic ? "dynamic" : s.fem_solver == FemSolver::implicit ? "implicit" : "static";
     j["elements"] = s.fem_order == 2 ? "quadratic" : "linear";
   }
+  if (s.model == ModelKind::vessel) {
+    j["skinning"] = s.vessel.skinning == VesselSkinning::rmf ? "rmf" : "spokes";
+    j["spokes"] = s.vessel.spokes;
+  }
   nlohmann::json inputs = nlohmann::json::object();
   const ModelInputs read = model_inputs(s);
   if (read.grid) inputs["grid"] = s.grid.string();
   if (read.tetmesh) inputs["tetmesh"] = s.tetmesh.string();
   if (read.surface) inputs["surface"] = s.surface.string();
+  if (read.centerline) inputs["centerline"] = s.centerline.string();
   j["inputs"] = inputs;
   nlohmann::json instruments = nlohmann::json::array();  // files the run reads besides the stage outputs
   for (const auto& tool : s.tools) {
@@ -301,7 +332,7 @@ static Scenario parse_fields(const std::string& text, const fs::path& file, cons
   const YamlField top(doc, "", &name);
   if (!top.is_map()) top.fail("a scenario is a map of sections (name, model, material, time, output, ...)");
   top.only({"ctsurg_scenario", "name", "model", "material", "gravity_mm_per_s2", "fixed", "tools", "contact", "time", "output",
-            "render", "backend", "threads", "solver"});
+            "render", "backend", "threads", "solver", "vessel"});
   Scenario s;
   s.file = file;
   if (top.child("ctsurg_scenario").integer(1, 1000) != 1) top.child("ctsurg_scenario").fail("this ctsurg reads version 1");
@@ -309,10 +340,24 @@ static Scenario parse_fields(const std::string& text, const fs::path& file, cons
 
   const YamlField m = top.child("model");
   m.only({"kind", "grid", "surface", "tetmesh", "springs_from", "coupling", "mass_from_fraction", "material_law", "solver", "elements",
-          "close_cuts"});
-  const std::string kind = m.child("kind").one_of({"spring_grid", "explicit_springs", "fem"});
-  s.model = kind == "spring_grid" ? ModelKind::spring_grid : kind == "fem" ? ModelKind::fem : ModelKind::explicit_springs;
-  if (s.model != ModelKind::fem || m.has("grid")) s.grid = resolve(base_dir, m.child("grid").text());
+          "close_cuts", "centerline"});
+  const std::string kind = m.child("kind").one_of({"spring_grid", "explicit_springs", "fem", "vessel"});
+  s.model = kind == "spring_grid" ? ModelKind::spring_grid
+            : kind == "fem"       ? ModelKind::fem
+            : kind == "vessel"    ? ModelKind::vessel
+                                  : ModelKind::explicit_springs;
+  if (s.model == ModelKind::vessel) {
+    // A vessel reads its centerline only and draws its own surface from it (sim/vessel).
+    for (const char* other : {"grid", "surface", "tetmesh", "coupling", "mass_from_fraction"}) {
+      if (m.has(other)) m.child(other).fail("not for kind: vessel (it reads the centerline only and draws its own surface)");
+    }
+    const std::string path = m.child("centerline").text();
+    if (path.empty()) m.child("centerline").fail("must name a centerline file (ctsurg-centerline)");
+    s.centerline = resolve(base_dir, path);
+  } else if (m.has("centerline")) {
+    m.child("centerline").fail("only for kind: vessel");
+  }
+  if ((s.model != ModelKind::fem && s.model != ModelKind::vessel) || m.has("grid")) s.grid = resolve(base_dir, m.child("grid").text());
   if (m.has("material_law") || m.has("solver")) {
     if (s.model != ModelKind::fem) m.child(m.has("solver") ? "solver" : "material_law").fail("only for kind: fem");
   }
@@ -349,7 +394,8 @@ static Scenario parse_fields(const std::string& text, const fs::path& file, cons
   }
   if (m.has("mass_from_fraction")) s.mass_from_fraction = m.child("mass_from_fraction").boolean();
   if (m.has("close_cuts")) {
-    if (s.model == ModelKind::fem) m.child("close_cuts").fail("only for the spring models (a FEM cut's surface is left open)");
+    if (s.model == ModelKind::fem || s.model == ModelKind::vessel)
+      m.child("close_cuts").fail("only for the spring models (a FEM cut's surface is left open; a vessel caps its cuts)");
     s.close_cuts = m.child("close_cuts").boolean();
   }
 
@@ -373,10 +419,28 @@ static Scenario parse_fields(const std::string& text, const fs::path& file, cons
     s.stiffness_damping_s = mat.child("stiffness_damping_s").non_negative();
   }
 
+  if (s.model == ModelKind::vessel) {
+    const YamlField v = top.child("vessel");
+    v.only({"wall_thickness_mm", "spokes", "skinning", "blood_filled", "newton_iterations"});
+    s.vessel.wall_thickness_mm = v.child("wall_thickness_mm").positive();
+    if (s.vessel.wall_thickness_mm > 50) v.child("wall_thickness_mm").fail("must be at most 50 mm");
+    if (v.has("spokes")) s.vessel.spokes = static_cast<int>(v.child("spokes").integer(3, 1024));
+    if (v.has("skinning")) {
+      s.vessel.skinning = v.child("skinning").one_of({"rmf", "spokes"}) == std::string("rmf") ? VesselSkinning::rmf : VesselSkinning::spokes;
+    }
+    if (v.has("blood_filled")) s.vessel.blood_filled = v.child("blood_filled").boolean();
+    if (v.has("newton_iterations")) s.vessel.newton_iterations = static_cast<int>(v.child("newton_iterations").integer(1, 100));
+  } else if (top.has("vessel")) {
+    top.child("vessel").fail("only for kind: vessel");
+  }
   if (top.has("gravity_mm_per_s2")) s.gravity = top.child("gravity_mm_per_s2").vec3();
   if (top.has("fixed")) {
     for (const auto& item : top.child("fixed").items()) {
       s.fixed.push_back(fixed_of(item));
+      if (s.model == ModelKind::vessel && s.fixed.back().kind == FixedRegionSpec::Kind::label) {
+        item.child("label").fail("a centerline has no labels (kind: vessel): use box, box_fraction or half_space");
+      }
+      if (s.model == ModelKind::vessel && s.fixed.back().axes != 7) item.child("axes").fail("kind: vessel fixes whole atoms");
       if (s.fixed.back().axes != 7 && s.model == ModelKind::fem && s.fem_solver == FemSolver::dynamic) {
         item.child("axes").fail("fixing some axes only needs solver: static or implicit for kind: fem (the explicit "
                                 "dynamics fixes whole nodes)");
@@ -385,7 +449,10 @@ static Scenario parse_fields(const std::string& text, const fs::path& file, cons
   }
   if (top.has("tools")) {
     for (const auto& item : top.child("tools").items()) {
-      s.tools.push_back(tool_of(item, base_dir));
+      s.tools.push_back(tool_of(item, base_dir, s.model == ModelKind::vessel));
+      if (s.model == ModelKind::vessel && (s.tools.back().kind == ToolKind::instrument || s.tools.back().kind == ToolKind::suture)) {
+        item.fail(std::string(to_string(s.tools.back().kind)) + " is not supported by kind: vessel (grab, clamp, force, probe and cut are)");
+      }
       // FEM tools: grab (prescribed displacements), probe and instrument (contact, dynamic only), cut
       // (elements separated, nodes split: linear tets only, fem/fem_cutting.h).
       if (s.model == ModelKind::fem && s.tools.back().kind == ToolKind::suture) {
@@ -493,6 +560,15 @@ static Scenario parse_fields(const std::string& text, const fs::path& file, cons
     if (s.model != ModelKind::fem || s.fem_solver == FemSolver::dynamic)
       top.child("solver").fail("only for kind: fem with solver: static or implicit (the Newton solves' settings)");
     s.solver = solver_of(top.child("solver"));
+    if (s.solver.local_region_mm > 0) {
+      // The local region (fem/fem_local_region.h) couples quasi-static solves on linear tets around the tools.
+      const YamlField r = top.child("solver").child("local_region");
+      if (s.fem_solver != FemSolver::static_equilibrium) r.fail("only with solver: static (the region couples quasi-static solves)");
+      if (s.fem_order != 1) r.fail("needs linear (4-node) tets (elements: linear)");
+      bool acts = false;
+      for (const ToolAction& a : s.tools) acts = acts || a.kind == ToolKind::grab || a.kind == ToolKind::force;
+      if (!acts) r.fail("needs a grab or force tool: the region grows around the nodes the tools hold or load");
+    }
   }
   return s;
 }

@@ -1,5 +1,6 @@
 #include "ctsurg/sim/scenario/scenario_engine.h"
 
+#include "ctsurg/core/centerline_file.h"
 #include "ctsurg/core/error.h"
 #include "ctsurg/core/occupancy_grid_file.h"
 #include "ctsurg/core/surface_mesh_file.h"
@@ -15,6 +16,7 @@
 #include "ctsurg/sim/springs/spring_engine.h"
 #include "ctsurg/sim/surface/embedded_surface.h"
 #include "ctsurg/sim/surface/tet_embedding.h"
+#include "ctsurg/sim/vessel/vessel_engine.h"
 #include "rest_bounds.h"
 
 #include <cmath>
@@ -261,6 +263,8 @@ ScenarioEngine fem_engine(const Scenario& s, Backend backend, const std::functio
   o.newton.tolerance_mm = s.solver.tolerance_mm;
   o.newton.max_newton_iterations = s.solver.max_newton_iterations;
   o.newton.cg_max_iterations = s.solver.max_cg_iterations;
+  if (s.solver.local_region_mm > 0) o.local_region_mm = s.solver.local_region_mm;
+  o.local_region_balance_iterations = s.solver.local_region_balance;
   o.contact.enabled = s.contact.enabled;
   o.contact.self = s.contact.self;
   o.contact.distance_mm = s.contact.distance_mm;
@@ -284,11 +288,49 @@ ScenarioEngine fem_engine(const Scenario& s, Backend backend, const std::functio
   return r;
 }
 
+// kind: vessel: the centerline's chain in the frame of its points' centre, the fixed regions over its
+// atoms, the surface drawn from the atoms (its rest vertices are the trajectory's rest surface).
+ScenarioEngine vessel_engine(const Scenario& s, Backend backend, const std::function<void(const std::string&)>& note) {
+  const Centerline centerline = read_centerline_file(s.centerline);
+  const RestBounds lps_bounds = bounds_of(centerline.points);
+  const Vec3 origin = local_origin({0.5 * (lps_bounds.lo[0] + lps_bounds.hi[0]), 0.5 * (lps_bounds.lo[1] + lps_bounds.hi[1]),
+                                    0.5 * (lps_bounds.lo[2] + lps_bounds.hi[2])});
+  VesselWall wall;
+  wall.youngs_modulus_pa = s.material.youngs_modulus_pa;
+  wall.poisson_ratio = s.material.poisson_ratio;
+  wall.density = s.material.density;
+  wall.thickness_mm = s.vessel.wall_thickness_mm;
+  wall.blood_filled = s.vessel.blood_filled;
+  VesselChain chain = build_vessel_chain(centerline, origin, wall, s.file.string());
+  const std::vector<Real> rest_real(chain.rest.begin(), chain.rest.end());
+  const Held held = fixed_particles(s, rest_real, bounds_of(chain.rest), origin, [&](uint16_t) -> std::vector<int32_t> {
+    throw InputError(s.file.string(), "fixed", "a centerline has no labels");
+  });
+  VesselEngineOptions o;
+  static_cast<EngineOptions&>(o) = engine_options(s, note);
+  o.dt = s.dt_s;  // 0: a frame, 1/60 s
+  o.spokes = s.vessel.spokes;
+  o.skinning = s.vessel.skinning;
+  o.max_newton_iterations = s.vessel.newton_iterations;
+  auto engine = std::make_unique<VesselEngine>(std::move(chain), held.whole, origin, o, backend);
+  if (note) {
+    note("vessel: " + std::to_string(engine->chain().atom_count()) + " atoms, " + std::to_string(engine->chain().segment_count()) +
+         " segments, " + std::to_string(engine->chain().branch_count()) + " branches; backward Euler, dt " + std::to_string(engine->dt()) + " s");
+  }
+  ScenarioEngine r;
+  const std::vector<Real>& rest = engine->surface_rest_vertices();
+  r.surface_lps_vertices.resize(rest.size());
+  for (size_t i = 0; i < rest.size(); ++i) r.surface_lps_vertices[i] = static_cast<float>(static_cast<double>(rest[i]) + origin[i % 3]);
+  r.engine = std::move(engine);
+  return r;
+}
+
 }  // namespace
 
 ScenarioEngine make_scenario_engine(const Scenario& s, const std::function<void(const std::string&)>& note) {
   // cuda: InputError unless this build has CUDA and a device is present; auto: cuda exactly then.
   const Backend backend = resolve_backend(s.backend, s.file.string() + ": backend");
+  if (s.model == ModelKind::vessel) return vessel_engine(s, backend, note);
   return s.model == ModelKind::fem ? fem_engine(s, backend, note) : spring_engine(s, backend, note);
 }
 

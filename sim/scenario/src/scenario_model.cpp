@@ -4,9 +4,10 @@ namespace ctsurg::sim {
 
 ModelInputs model_inputs(const Scenario& s) {
   ModelInputs in;
-  in.grid = s.model != ModelKind::fem;
+  in.grid = s.model != ModelKind::fem && s.model != ModelKind::vessel;
+  in.centerline = s.model == ModelKind::vessel;
   in.tetmesh = s.model == ModelKind::fem || (s.model == ModelKind::explicit_springs && s.springs_from == SpringSource::tetmesh);
-  in.surface = !s.surface.empty();
+  in.surface = !s.surface.empty() && s.model != ModelKind::vessel;
   return in;
 }
 
@@ -15,6 +16,7 @@ std::string model_label(const Scenario& s) {
     case ModelKind::spring_grid: return "spring_grid";
     case ModelKind::explicit_springs:
       return s.springs_from == SpringSource::grid ? "explicit_springs (grid)" : "explicit_springs (tetmesh)";
+    case ModelKind::vessel: return s.vessel.skinning == VesselSkinning::rmf ? "vessel (rmf)" : "vessel (spokes)";
     case ModelKind::fem:
       return std::string("fem ") + fem_material_model_name(s.material_law) + (s.fem_order == 2 ? " quadratic" : "") +
              (s.fem_solver == FemSolver::dynamic ? " (dynamic)" : s.fem_solver == FemSolver::implicit ? " (implicit)" : " (static)");

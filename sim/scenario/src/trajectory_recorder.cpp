@@ -24,8 +24,12 @@ TrajectoryRecorder::TrajectoryRecorder(const Scenario& s, const SimulationEngine
   traj_.scenario = s.name;
   traj_.model = model_label(s);
   if (engine.has_surface()) {
-    traj_.surface_file = s.surface.string();
-    traj_.surface_sha256 = sha256_file(s.surface);
+    // A vessel's surface is drawn from its atoms: the trajectory's own triangles, no surface file (as an
+    // FEM run without one; ctsurg-render draws it without --surface). The centerline is in the provenance.
+    if (s.model != ModelKind::vessel) {
+      traj_.surface_file = s.surface.string();
+      traj_.surface_sha256 = sha256_file(s.surface);
+    }
     traj_.rest_vertices = std::move(surface_lps_vertices);
   } else {
     // No surface: the nodes stand in for it as a point set (no triangles).
@@ -68,6 +72,18 @@ void TrajectoryRecorder::record(SimulationEngine& engine, const ToolTimeline& ti
     closing_.push_back(engine.closing_triangles());
   }
   traj_.topology_of_frame.push_back(static_cast<int32_t>(traj_.topologies.size() - 1));
+  // The local region (an FEM run with one): (F, V) once any frame has it, 0 for the frames before.
+  const size_t nv = static_cast<size_t>(traj_.vertex_count()), frame = traj_.time.size() - 1;
+  if (engine.surface_vertex_region(region_)) {
+    if (region_.size() != nv) {
+      throw RuntimeError("trajectory recorder: the engine gave " + std::to_string(region_.size()) + " region flags for " +
+                         std::to_string(nv) + " surface vertices");
+    }
+    if (traj_.vertex_region.empty()) traj_.vertex_region.assign(frame * nv, 0);
+    traj_.vertex_region.insert(traj_.vertex_region.end(), region_.begin(), region_.end());
+  } else if (!traj_.vertex_region.empty()) {
+    traj_.vertex_region.resize(traj_.vertex_region.size() + nv, 0);
+  }
   if (write_particles_) {
     engine.positions(positions_);
     for (size_t i = 0; i < positions_.size(); ++i) traj_.particles.push_back(static_cast<float>(positions_[i] + origin_[i % 3]));
@@ -142,6 +158,7 @@ void TrajectoryRecorder::truncate(size_t frames) {
   traj_.topologies.resize(frames ? static_cast<size_t>(traj_.topology_of_frame.back()) + 1 : 0);
   closing_.resize(traj_.topologies.size());
   traj_.particles.resize(frames * traj_.rest_particles.size());
+  if (!traj_.vertex_region.empty()) traj_.vertex_region.resize(frames * static_cast<size_t>(traj_.vertex_count()));
   for (auto& m : metrics_) m.values.resize(frames);
   traj_.spheres.resize(frames * traj_.sphere_kinds.size() * 4);
   traj_.blades.resize(frames * blades_ * 7);

@@ -12,6 +12,9 @@
 //   /trajectory/surface/topology_of_frame  (F)        int32    the topology each frame uses
 //   /trajectory/surface/closing_triangles  (K)        int64    optional, one per topology: how many of its last
 //                                          triangles close the holes a cut left (drawn as the wound's inside)
+//   /trajectory/surface/vertex_region      (F, V)     uint8    optional: the FEM local region at each frame
+//                                          (sim/fem/fem_local_region.h), per surface vertex: 0 outside, 1 in
+//                                          the region, 2 on its interface (files without it read as empty)
 //   /trajectory/metrics/<name>             (F)        float64  attribute units (e.g. kinetic_energy, nJ)
 //   /trajectory/tools/spheres              (F, S, 4)  float64  centre xyz LPS mm, radius mm (0: inactive)
 //                                          attribute kinds: "grab;probe;..." (one per sphere)
@@ -27,7 +30,8 @@
 //   /trajectory/particles/positions        (F, P, 3)  float32  optional: the nodes at each frame
 //
 // plus an XDMF sidecar: a temporal collection of the surface (and the particles as a point cloud),
-// with the displacement as a vector attribute, which ParaView plays as an animation.
+// with the displacement as a vector attribute (and the local region, when present, as a scalar
+// attribute), which ParaView plays as an animation.
 #pragma once
 
 #include "ctsurg/core/provenance.h"
@@ -65,6 +69,7 @@ struct Trajectory {
   std::vector<std::vector<uint32_t>> topologies;   // each T_k x 3
   std::vector<int32_t> topology_of_frame;          // F, index into topologies
   std::vector<int64_t> closing_triangles;          // one per topology (its last triangles closing cut holes), or empty
+  std::vector<uint8_t> vertex_region;              // F x V: 0 outside, 1 local region, 2 its interface; or empty
   std::vector<TrajectoryMetric> metrics;
   std::vector<std::string> sphere_kinds;           // S: "grab" or "probe"
   std::vector<double> spheres;                     // F x S x 4
@@ -86,10 +91,12 @@ struct Trajectory {
   // Frame f's vertices (V x 3) and triangles.
   const float* frame_vertices(int64_t f) const { return vertices.data() + f * vertex_count() * 3; }
   const std::vector<uint32_t>& frame_triangles(int64_t f) const { return topologies[topology_of_frame[f]]; }
+  // Frame f's local-region flags (V), or nullptr when the trajectory has none.
+  const uint8_t* frame_region(int64_t f) const { return vertex_region.empty() ? nullptr : vertex_region.data() + f * vertex_count(); }
 };
 
 // Checks every array's size against F, V, S, B, I, P and the triangles' vertex ids (and the poses'
-// rotations: unit quaternions); InputError(file,
+// rotations: unit quaternions; the region's flags: 0, 1 or 2); InputError(file,
 // "/trajectory/...", ...) naming the first inconsistency (file: the name used in messages).
 void validate_trajectory(const Trajectory& trajectory, const std::string& file);
 // Writes `path` and its .xdmf sidecar atomically (validated first).

@@ -12,6 +12,10 @@ namespace ctsurg {
 
 // Writes `text` in white on a dark band at the top-left corner of `image` (scaled to its size).
 void draw_caption(RgbImage& image, const std::string& text);
+// Writes a legend entry at the bottom-left corner of `image`: on a dark band, a swatch of `rgb` hatched as
+// the renderer hatches the FEM local region (surface_renderer.h) with a dark interface line under it,
+// then `text` in white (scaled to the image's size).
+void draw_region_legend(RgbImage& image, const std::string& text, const float rgb[3]);
 // The images (same height) left to right with a 4-pixel separator. InputError when heights differ.
 RgbImage side_by_side(const std::vector<RgbImage>& images);
 // a and b (same size) blended: each pixel (a + b) / 2, so the two shapes show through each other

@@ -38,11 +38,14 @@ struct SceneFrame {
   std::vector<float> stitch_triangles;            // placed stitches as thin cylinders (kStitchRadiusMm), the
                                                   //   same layout as instrument_triangles
   std::vector<float> values;                      // #V heat-map values (mm) or empty
+  const uint8_t* region = nullptr;                // #V FEM local-region flags (0 outside, 1 region, 2 its
+                                                  //   interface; not owned) or nullptr: none
 };
 
 // The rest surface (topology id -1).
 SceneFrame rest_scene_frame(const SurfaceMesh& surface);
-// Frame f of a trajectory (tools included; topology id = the trajectory's topology index).
+// Frame f of a trajectory (tools and its local region included; topology id = the trajectory's topology
+// index).
 SceneFrame trajectory_scene_frame(const Trajectory& trajectory, int64_t f);
 
 // InputError naming both files and /trajectory/surface/rest_vertices when the trajectory's vertex

@@ -11,7 +11,9 @@
 // a little ambient. Two-sided: back faces (the inside, seen through a cut) get the flipped normal and
 // a darker red, so incisions read clearly; so do the triangles closing a cut's holes (SceneFrame::
 // closing_triangles), front or back, so a closed incision still reads as a wound. Heat maps colour the surface through the Turbo table
-// (colour_map.h) at value / heat_max_mm, keeping the lighting. Tools: spheres as translucent
+// (colour_map.h) at value / heat_max_mm, keeping the lighting. The FEM local region (SceneFrame::region),
+// when drawn: its vertices hatched in RenderStyle::region_rgb (diagonal stripes in screen space, so the
+// colour or heat value underneath still shows between them), its interface as a dark band. Tools: spheres as translucent
 // icospheres (grab green, probe blue), blades as translucent steel quads on the cutting edge, suture
 // stitches as opaque violet cylinders.
 #pragma once
@@ -33,6 +35,8 @@ struct RenderStyle {
   float heat_max_mm = 1.0f;      // the value at the top of the colour map (> 0)
   float tissue_rgb[3] = {0.78f, 0.38f, 0.34f};  // linear-ish albedo of the outside
   float background_rgb[3] = {0.11f, 0.12f, 0.14f};
+  bool region = true;            // hatch the frame's local region when it has one (SceneFrame::region)
+  float region_rgb[3] = {0.1f, 0.85f, 0.9f};  // the region's stripes (a cyan far from the tissue's red)
 };
 
 class SurfaceRenderer {

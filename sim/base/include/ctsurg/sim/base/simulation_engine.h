@@ -147,6 +147,11 @@ class SimulationEngine {
   // frame; they move with the nodes they joined). Empty before the stitches are placed, and for an
   // engine without sutures.
   virtual std::vector<std::array<Vec3, 2>> stitches([[maybe_unused]] size_t tool) const { return {}; }
+  // The region an engine solves with its full model while the rest follows a cheaper one (an FEM local
+  // region: fem/fem_local_region.h), per surface vertex (#V as surface_vertices(); the nodes without a
+  // surface): 0 outside, 1 in the region, 2 on its interface. Returns false (flags untouched) for an
+  // engine or a run without one.
+  virtual bool surface_vertex_region([[maybe_unused]] std::vector<uint8_t>& flags) const { return false; }
 
   // Stability and restarts.
   virtual StabilityReport check_stability() = 0;

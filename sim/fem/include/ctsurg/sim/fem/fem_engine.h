@@ -11,6 +11,9 @@
 //            one factorisation for the run, where the supports alone hold the model), the other laws
 //            (and the linear one where a grab completes the supports) by Newton (fem_static_solver.h:
 //            direct solves, the factor kept across frames), warm-started from the previous frame.
+//            With local_region_mm: Newton only in a region of that geodesic radius around the tools'
+//            nodes, the rest from the linear model factorised once (fem_local_region.h, the FEM paper's
+//            section 5.2).
 //   implicit backward Euler (fem_implicit_dynamics.h): Newton per step on the factorised tangent, steps
 //            of a frame (dt default 1/60 s) whatever the tissue's stiffness; grabs and forces as the
 //            explicit dynamics'.
@@ -23,7 +26,9 @@
 //
 // Metrics beyond the engine's common ones: newton_iterations and cg_iterations of the last static
 // solve, or the implicit dynamics' Newton iterations of all steps so far (cumulative: differences
-// between frames are per frame); 0 for the explicit dynamics.
+// between frames are per frame); 0 for the explicit dynamics. With a local region also region_nodes,
+// region_tets, interface_nodes (the last frame's region) and interface_residual (uN: the out-of-balance
+// force at the interface, fem_local_region.h).
 //
 // Quadratic (10-node) tets run static and implicit; the surface follows them with the quadratic shape
 // functions at each vertex's barycentric coordinates in its tet.
@@ -38,6 +43,7 @@
 #include "ctsurg/sim/fem/fem_explicit_dynamics.h"
 #include "ctsurg/sim/fem/fem_implicit_dynamics.h"
 #include "ctsurg/sim/fem/fem_linear_static_solver.h"
+#include "ctsurg/sim/fem/fem_local_region.h"
 #include "ctsurg/sim/fem/fem_model.h"
 #include "ctsurg/sim/fem/fem_static_solver.h"
 #include "ctsurg/sim/fem/fem_tools.h"
@@ -62,6 +68,12 @@ struct FemEngineOptions : EngineOptions {
   FemStaticOptions newton;
   // Contact between the model's bodies and self-contact (fem_contact.h): solver dynamic, cpu.
   FemContactOptions contact;
+  // Local region deformation (fem_local_region.h): the geodesic radius R (mm, > 0) of the region around
+  // the tools' nodes that Newton solves with the model's law, the rest following the linear model
+  // factorised once. solver static_equilibrium, linear tets, supports that hold the model alone.
+  // Absent: the whole mesh by the model's law, as without it.
+  std::optional<double> local_region_mm;
+  int local_region_balance_iterations = 0;  // FemLocalRegionOptions::balance_iterations (0: Dirichlet coupling)
 };
 
 class FemEngine final : public SimulationEngine {
@@ -108,6 +120,13 @@ class FemEngine final : public SimulationEngine {
   const std::vector<Real>& surface_rest_vertices() const override { return surface_.rest_vertices(); }
   EngineMetrics metrics() const override;
   bool engaged(size_t tool) const override { return holds_.engaged(tool); }
+  // With local_region_mm: the last frame's region, per node (#N: kFemOutsideRegion, kFemInRegion,
+  // kFemRegionInterface of fem_local_region.h); nullptr without.
+  const std::vector<uint8_t>* local_region() const { return local_ ? &local_->node_region() : nullptr; }
+  // With local_region_mm: the last frame's region per surface vertex, each the largest flag of the nodes
+  // it is tied to (its tet's corners: a vertex in a tet that touches the interface is drawn on it); the
+  // node flags themselves without a surface. All 0 before the first solve. false without a local region.
+  bool surface_vertex_region(std::vector<uint8_t>& flags) const override;
 
   StabilityReport check_stability() override { return {}; }  // the dynamics check every step
   bool can_restart() const override { return false; }
@@ -143,6 +162,8 @@ class FemEngine final : public SimulationEngine {
   // static
   std::unique_ptr<FemLinearStaticSolver> linear_;
   std::unique_ptr<FemStaticSolver> static_solver_;
+  std::unique_ptr<FemLocalRegionSolver> local_;
+  std::vector<int32_t> seeds_;  // scratch: the tools' nodes the local region grows from
   FemBoundaryConditions bc_;
   double static_time_ = 0;
   int solves_ = 0, newton_ = 0, cg_ = 0;

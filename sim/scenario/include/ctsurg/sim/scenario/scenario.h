@@ -15,6 +15,7 @@
 #include "ctsurg/sim/fem/fem_material.h"
 #include "ctsurg/sim/fem/fem_static_solver.h"
 #include "ctsurg/sim/surface/surface_coupling.h"
+#include "ctsurg/sim/vessel/vessel_skinning.h"
 
 #include <array>
 #include <cstdint>
@@ -25,7 +26,7 @@
 
 namespace ctsurg::sim {
 
-enum class ModelKind { spring_grid, explicit_springs, fem };
+enum class ModelKind { spring_grid, explicit_springs, fem, vessel };
 enum class SpringSource { grid, tetmesh };  // where explicit springs come from
 // fem: the material law is a FemMaterialModel (fem/fem_material.h), the solver a FemSolver
 // (fem/fem_engine.h).
@@ -115,6 +116,10 @@ struct SolverSpec {
   double tolerance_mm = 0;         // the stopping rule in mm; 0 = the solvers' relative default
   int max_newton_iterations = 25;  // per solve or step
   int max_cg_iterations = 0;       // iterative: 0 = twice the unknowns
+  // local_region: {radius_mm: R}: Newton only within R mm (geodesic) of the tools' nodes, the rest from
+  // the linear model factorised once (fem/fem_local_region.h); solver static, a grab or force tool.
+  double local_region_mm = 0;      // 0: none (the whole mesh by the material law)
+  int local_region_balance = 0;    // local_region.balance_iterations: 0 = Dirichlet coupling alone
 };
 
 // Contact between bodies and self-contact of an FEM model (fem/fem_contact.h), from the scenario's
@@ -126,6 +131,16 @@ struct ContactSpec {
   bool split_labels = false;         // the mesh's labels become bodies (several organs in one mesh)
   std::vector<HalfSpace> split_planes;  // LPS mm: each plane splits the mesh into the bodies either side
   double gap_mm = 0;                 // a slab this thick around each plane taken out: the bodies start apart
+};
+
+// kind: vessel (sim/vessel/vessel_engine.h), from the scenario's `vessel:` section; the wall's E, nu and
+// density are the material section's.
+struct VesselSpec {
+  double wall_thickness_mm = 0;   // (0, 50] mm, required
+  int spokes = 16;                // vertices per ring of the surface, [3, 1024]
+  VesselSkinning skinning = VesselSkinning::rmf;  // rmf | spokes (the paper's eq. 15-16)
+  bool blood_filled = true;       // the blood in the lumen adds to the mass (vessel_calibration.h)
+  int newton_iterations = 6;      // Gauss-Newton iterations per step at most, [1, 100]
 };
 
 // Bounds of the time section (scenario.cpp): simulated time, the smallest step, output frames.
@@ -142,6 +157,8 @@ struct Scenario {
                                     // (which does not read it); scenario_model.h says what a model reads
   std::filesystem::path surface;    // surface file (ctsurg-surface/-normalmap) on that grid; optional
   std::filesystem::path tetmesh;    // tet mesh file (ctsurg-tetmesh): kind fem, or springs_from: tetmesh
+  std::filesystem::path centerline; // centerline file (ctsurg-centerline): kind vessel (reads nothing else)
+  VesselSpec vessel;                // kind vessel
   CouplingMode coupling = CouplingMode::trilinear;
   FemMaterialModel material_law = FemMaterialModel::neo_hookean;  // kind: fem
   FemSolver fem_solver = FemSolver::dynamic;                       // kind: fem

@@ -7,6 +7,9 @@
 //                                   whole-millimetre point nearest the grid's centre
 //   fem                             FemEngine (fem/fem_engine.h); the local origin is the
 //                                   whole-millimetre point nearest the tet mesh's centre
+//   vessel                          VesselEngine (vessel/vessel_engine.h) on the centerline's atoms, cpu
+//                                   only; the local origin is the whole-millimetre point nearest the
+//                                   centerline's centre
 //
 // Every problem a user can fix is an InputError naming the scenario file and the field: a backend
 // that cannot run here ("backend"), a fixed region that selects nothing ("fixed[r]"), an FEM step

@@ -7,6 +7,7 @@
 //   explicit_springs, from tetmesh  tetmesh and grid (the grid's centre sets the run's local frame)
 //                                   (+ surface, embedded in the tets)
 //   fem                             tetmesh (+ surface, embedded in the tets); a grid it names is not read
+//   vessel                          centerline (the surface is drawn from it: sim/vessel/vessel_skinning.h)
 #pragma once
 
 #include "ctsurg/sim/scenario/scenario.h"
@@ -19,11 +20,12 @@ struct ModelInputs {
   bool grid = false;     // scenario.grid
   bool tetmesh = false;  // scenario.tetmesh
   bool surface = false;  // scenario.surface
+  bool centerline = false;  // scenario.centerline
 };
 
 ModelInputs model_inputs(const Scenario& scenario);
 
-// "spring_grid", "explicit_springs (grid)", "explicit_springs (tetmesh)", "fem neo_hookean (static)", ...
+// "spring_grid", "explicit_springs (grid)", "explicit_springs (tetmesh)", "fem neo_hookean (static)", "vessel (rmf)", ...
 std::string model_label(const Scenario& scenario);
 
 }  // namespace ctsurg::sim

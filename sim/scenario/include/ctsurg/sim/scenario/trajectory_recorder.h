@@ -2,7 +2,9 @@
 // surface's vertices (or the nodes' when the scenario has no surface) and its topology when a cut
 // changed it (and how many of its last triangles close the cut's holes), optionally every node's position, the tools (spheres: centre and radius, 0 when not
 // acting; blades: the edge's ends and whether it is active; instruments: their meshes once and their
-// poses per frame; stitches: their two points and whether they are placed), and the metrics:
+// poses per frame; stitches: their two points and whether they are placed), the engine's local region
+// per surface vertex when it has one (SimulationEngine::surface_vertex_region: frames before it had one
+// read 0), and the metrics:
 //
 //   kinetic_energy (nJ), elastic_energy (nJ), max_displacement (mm, over the nodes),
 //   surface_max_displacement (mm, over the surface's vertices; the nodes' when there is none),
@@ -48,6 +50,7 @@ class TrajectoryRecorder {
   std::vector<int64_t> closing_;    // per topology: its last triangles closing cut holes
   std::vector<TrajectoryMetric> metrics_;
   std::vector<float> vertices_;    // scratch: the frame's vertices, local frame
+  std::vector<uint8_t> region_;    // scratch: the frame's local-region flags
   std::vector<double> positions_;  // scratch: the nodes' positions, local frame
 };
 
