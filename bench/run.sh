@@ -386,5 +386,18 @@ if want accuracy; then
     fi
   } >"$acc"
   splice accuracy "$acc"
+  # The local region's rows against the full solve on the same mesh (time_vs_error's local_region.md).
+  lr=${TVE_OUT:-$BUILD/time_vs_error}/local_region.md
+  if [[ -f $lr ]]; then
+    {
+      echo "## FEM local region against the full solve (\`bench/time_vs_error.sh\`, \`LOCAL_ONLY=1\` for these rows alone)"
+      echo
+      machine_line
+      echo "Tables of the run that finished $(date -u -r "$lr" '+%Y-%m-%d %H:%M UTC'); method: docs/fem.md, \"Local region\"."
+      echo
+      cat "$lr"
+    } >"$WORK/local_region.md"
+    splice local_region "$WORK/local_region.md"
+  fi
 fi
 echo "bench/run.sh: wrote $doc"

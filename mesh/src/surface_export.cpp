@@ -12,12 +12,14 @@
 #include <assimp/scene.h>
 
 #include <nlohmann/json.hpp>
+#include <spdlog/fmt/fmt.h>
 
 #include <algorithm>
 #include <array>
 #include <cctype>
 #include <cstring>
 #include <fstream>
+#include <iterator>
 #include <map>
 #include <sstream>
 
@@ -175,6 +177,72 @@ void add_gltf_tangents(std::vector<std::pair<std::string, std::string>>& files, 
   files.front().second = glb;
 }
 
+// VTK legacy PolyData, ASCII ("VTK File Formats", VTK User's Guide, sec. 19.3): version 4.2 (classic
+// POLYGONS cells, which every VTK reader since 4 reads). The title line carries "SPACE=LPS": 3D
+// Slicer (4.11 and later, vtkMRMLModelStorageNode) reads the coordinate frame from it, so the
+// model lands on the CT instead of being mirrored through the RAS default of older files.
+std::string write_vtk_legacy(const SurfaceMesh& mesh) {
+  const int64_t nv = mesh.vertex_count(), nf = mesh.triangle_count();
+  fmt::memory_buffer b;
+  auto o = std::back_inserter(b);
+  fmt::format_to(o, "# vtk DataFile Version 4.2\nctsurg surface, millimetres. SPACE=LPS\nASCII\nDATASET POLYDATA\n"
+                    "POINTS {} float\n", nv);
+  for (int64_t v = 0; v < nv; ++v) {
+    const float* p = &mesh.vertices[static_cast<std::size_t>(3 * v)];
+    fmt::format_to(o, "{} {} {}\n", p[0], p[1], p[2]);
+  }
+  fmt::format_to(o, "POLYGONS {} {}\n", nf, 4 * nf);
+  for (int64_t f = 0; f < nf; ++f) {
+    const uint32_t* t = &mesh.triangles[static_cast<std::size_t>(3 * f)];
+    fmt::format_to(o, "3 {} {} {}\n", t[0], t[1], t[2]);
+  }
+  fmt::format_to(o, "POINT_DATA {}\nNORMALS Normals float\n", nv);
+  for (int64_t v = 0; v < nv; ++v) {
+    const float* n = &mesh.normals[static_cast<std::size_t>(3 * v)];
+    fmt::format_to(o, "{} {} {}\n", n[0], n[1], n[2]);
+  }
+  return fmt::to_string(b);
+}
+
+// VTK XML PolyData, ASCII. Slicer reads the frame of a .vtp from a FieldData string array named
+// "SPACE" (vtkMRMLModelStorageNode::GetCoordinateSystemFromFieldData); ascii string arrays hold
+// character codes with a 0 after each string: "LPS" = 76 80 83 0.
+std::string write_vtp(const SurfaceMesh& mesh) {
+  const int64_t nv = mesh.vertex_count(), nf = mesh.triangle_count();
+  fmt::memory_buffer b;
+  auto o = std::back_inserter(b);
+  fmt::format_to(o, "<?xml version=\"1.0\"?>\n<!-- ctsurg surface, millimetres. SPACE=LPS -->\n"
+                    "<VTKFile type=\"PolyData\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n"
+                    "  <PolyData>\n    <FieldData>\n"
+                    "      <DataArray type=\"String\" Name=\"SPACE\" NumberOfTuples=\"1\" format=\"ascii\">\n"
+                    "        76 80 83 0\n      </DataArray>\n    </FieldData>\n"
+                    "    <Piece NumberOfPoints=\"{}\" NumberOfVerts=\"0\" NumberOfLines=\"0\" NumberOfStrips=\"0\" "
+                    "NumberOfPolys=\"{}\">\n"
+                    "      <PointData Normals=\"Normals\">\n"
+                    "        <DataArray type=\"Float32\" Name=\"Normals\" NumberOfComponents=\"3\" format=\"ascii\">\n",
+                 nv, nf);
+  for (int64_t v = 0; v < nv; ++v) {
+    const float* n = &mesh.normals[static_cast<std::size_t>(3 * v)];
+    fmt::format_to(o, "{} {} {}\n", n[0], n[1], n[2]);
+  }
+  fmt::format_to(o, "        </DataArray>\n      </PointData>\n      <Points>\n"
+                    "        <DataArray type=\"Float32\" NumberOfComponents=\"3\" format=\"ascii\">\n");
+  for (int64_t v = 0; v < nv; ++v) {
+    const float* p = &mesh.vertices[static_cast<std::size_t>(3 * v)];
+    fmt::format_to(o, "{} {} {}\n", p[0], p[1], p[2]);
+  }
+  fmt::format_to(o, "        </DataArray>\n      </Points>\n      <Polys>\n"
+                    "        <DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">\n");
+  for (int64_t f = 0; f < nf; ++f) {
+    const uint32_t* t = &mesh.triangles[static_cast<std::size_t>(3 * f)];
+    fmt::format_to(o, "{} {} {}\n", t[0], t[1], t[2]);
+  }
+  fmt::format_to(o, "        </DataArray>\n        <DataArray type=\"Int64\" Name=\"offsets\" format=\"ascii\">\n");
+  for (int64_t f = 1; f <= nf; ++f) fmt::format_to(o, "{}\n", 3 * f);
+  fmt::format_to(o, "        </DataArray>\n      </Polys>\n    </Piece>\n  </PolyData>\n</VTKFile>\n");
+  return fmt::to_string(b);
+}
+
 }  // namespace
 
 std::string surface_export_format(const std::filesystem::path& path) {
@@ -185,6 +253,8 @@ std::string surface_export_format(const std::filesystem::path& path) {
   if (ext == ".obj") return "objnomtl";
   if (ext == ".stl") return "stlb";
   if (ext == ".ply") return "ply";
+  if (ext == ".vtk") return "vtk";
+  if (ext == ".vtp") return "vtp";
   return "";
 }
 
@@ -193,9 +263,12 @@ std::vector<std::pair<std::string, std::string>> export_surface_mesh(const std::
                                                                      const std::string& normal_map_uri) {
   const std::string format = surface_export_format(output);
   if (format.empty()) {
-    throw InputError(output.string(), "suffix", "unknown output format; use .h5, .glb, .gltf, .obj, .stl or .ply");
+    throw InputError(output.string(), "suffix", "unknown output format; use .h5, .glb, .gltf, .obj, .stl, .ply, .vtk or .vtp");
   }
   if (mesh.vertex_count() == 0 || mesh.triangle_count() == 0) throw InputError(output.string(), "surface", "the mesh is empty");
+  // VTK formats are written here (no Assimp exporter exists for them).
+  if (format == "vtk") return {{output.filename().string(), write_vtk_legacy(mesh)}};
+  if (format == "vtp") return {{output.filename().string(), write_vtp(mesh)}};
 
   // The scene owns everything it points to and frees it in its destructor.
   aiScene scene;

@@ -19,12 +19,19 @@ namespace {
 
 using Buffer = fmt::memory_buffer;
 
+// The cell array is "labels", as SegmentMesher (3D Slicer) writes it, so Slicer and the same
+// ParaView/meshio pipelines read both meshers' files alike.
 void write_vtu(Buffer& b, const TetMesh& m) {
   const int64_t nn = m.node_count(), nt = m.tet_count();
   auto o = std::back_inserter(b);
   fmt::format_to(o, "<?xml version=\"1.0\"?>\n<!-- ctsurg tet mesh, LPS millimetres -->\n"
                     "<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n"
-                    "  <UnstructuredGrid>\n    <Piece NumberOfPoints=\"{}\" NumberOfCells=\"{}\">\n", nn, nt);
+                    "  <UnstructuredGrid>\n"
+                    // 3D Slicer reads the frame from a FieldData string array "SPACE" (vtkMRMLModelStorageNode);
+                    // ascii string arrays hold character codes, each string ending in 0: "LPS" = 76 80 83 0.
+                    "    <FieldData>\n      <DataArray type=\"String\" Name=\"SPACE\" NumberOfTuples=\"1\" format=\"ascii\">\n"
+                    "        76 80 83 0\n      </DataArray>\n    </FieldData>\n"
+                    "    <Piece NumberOfPoints=\"{}\" NumberOfCells=\"{}\">\n", nn, nt);
   fmt::format_to(o, "      <Points>\n        <DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"ascii\">\n");
   for (int64_t v = 0; v < nn; ++v) {
     const double* p = &m.nodes[static_cast<std::size_t>(3 * v)];
@@ -41,8 +48,8 @@ void write_vtu(Buffer& b, const TetMesh& m) {
   // VTK_TETRA = 10.
   fmt::format_to(o, "        </DataArray>\n        <DataArray type=\"UInt8\" Name=\"types\" format=\"ascii\">\n");
   for (int64_t t = 0; t < nt; ++t) fmt::format_to(o, "10\n");
-  fmt::format_to(o, "        </DataArray>\n      </Cells>\n      <CellData Scalars=\"label\">\n"
-                    "        <DataArray type=\"UInt16\" Name=\"label\" format=\"ascii\">\n");
+  fmt::format_to(o, "        </DataArray>\n      </Cells>\n      <CellData Scalars=\"labels\">\n"
+                    "        <DataArray type=\"UInt16\" Name=\"labels\" format=\"ascii\">\n");
   for (const uint16_t l : m.tet_labels) fmt::format_to(o, "{}\n", l);
   fmt::format_to(o, "        </DataArray>\n      </CellData>\n    </Piece>\n  </UnstructuredGrid>\n</VTKFile>\n");
 }

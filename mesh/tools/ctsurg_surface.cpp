@@ -1,6 +1,6 @@
 // ctsurg-surface INPUT.h5 OUTPUT: the isosurface of an occupancy grid's volume fractions (or of an
 // HU volume) by marching cubes, as a ctsurg surface file (.h5 + XDMF) or a mesh for other programs
-// (.glb, .gltf, .obj, .stl, .ply).
+// (.glb, .gltf, .obj, .stl, .ply, and .vtk/.vtp for 3D Slicer).
 #include "ctsurg/core/atomic_output.h"
 #include "ctsurg/core/ctsurg_file.h"
 #include "ctsurg/core/error.h"
@@ -57,10 +57,10 @@ int main(int argc, char** argv) {
       argc, argv, "ctsurg-surface",
       "Extract the organ surface by marching cubes (closed, consistently oriented, shared vertices, each vertex "
       "tied to its grid cell): from an occupancy grid's volume fractions (default iso 0.5) or an HU volume "
-      "(--iso HU). Output by suffix: .h5 (ctsurg surface + XDMF), .glb, .gltf, .obj, .stl, .ply; LPS mm.",
+      "(--iso HU). Output by suffix: .h5 (ctsurg surface + XDMF), .glb, .gltf, .obj, .stl, .ply, .vtk, .vtp (3D Slicer: SPACE=LPS); LPS mm.",
       [&](CLI::App& app) {
         app.add_option("input", input, "Occupancy grid (ctsurg-grid) or HU volume (ctsurg-import) file (.h5)")->required();
-        app.add_option("output", output, "Surface to write: .h5, .glb, .gltf, .obj, .stl or .ply")->required();
+        app.add_option("output", output, "Surface to write: .h5, .glb, .gltf, .obj, .stl, .ply, .vtk or .vtp")->required();
         iso_opt = app.add_option("--iso", iso, "Isovalue: volume fraction for a grid (default 0.5), HU for an HU volume (required)");
         app.add_option("--threads", threads, "OpenMP threads (0: all)")->check(CLI::Range(0, 1024));
         app.add_option("--smooth", smooth, "Taubin smoothing iterations (lambda 0.5, pass band 0.1; volume-preserving); 0: off")
@@ -77,7 +77,7 @@ int main(int argc, char** argv) {
         std::string ext = out_path.extension().string();
         const bool h5 = ext == ".h5" || ext == ".hdf5";
         if (!h5 && ctsurg::surface_export_format(out_path).empty()) {
-          throw ctsurg::InputError(output, "suffix", "unknown output format '" + ext + "'; use .h5, .glb, .gltf, .obj, .stl or .ply");
+          throw ctsurg::InputError(output, "suffix", "unknown output format '" + ext + "'; use .h5, .glb, .gltf, .obj, .stl, .ply, .vtk or .vtp");
         }
         if (!std::isfinite(iso)) throw ctsurg::InputError("--iso", "", "must be a finite number");
         ctsurg::check_output_paths(h5 ? std::vector<fs::path>{out_path, ctsurg::xdmf_path_for(out_path)}

@@ -1,6 +1,8 @@
 // ctsurg-tetmesh GRID.h5 OUTPUT: a boundary-conforming Delaunay tetrahedral mesh (CGAL Mesh_3 with
 // sliver perturbation and exudation) of the tissue labels in an occupancy grid file, as a ctsurg tet
 // mesh file (.h5 + XDMF) or for other programs (.vtu, .msh, .mesh); LPS mm.
+// ctsurg-tetmesh --import MESH OUTPUT: a tet mesh from another mesher (.vtu, .msh, .mesh), checked,
+// oriented, with boundary faces and the quality report, written the same ways.
 #include "ctsurg/core/atomic_output.h"
 #include "ctsurg/core/error.h"
 #include "ctsurg/core/memory_guard.h"
@@ -11,6 +13,7 @@
 #include "ctsurg/core/version.h"
 #include "ctsurg/core/xdmf_sidecar.h"
 #include "ctsurg/mesh/tet_mesh_export.h"
+#include "ctsurg/mesh/tet_mesh_import.h"
 #include "ctsurg/mesh/tetrahedral_meshing.h"
 
 #include <spdlog/spdlog.h>
@@ -26,7 +29,7 @@ namespace {
 // facet data, vertices, the coarse outside cells, the optimisers' copies), bytes.
 constexpr uint64_t kBytesPerTet = 1024;
 
-void log_quality(const ctsurg::TetMesh& m) {
+void log_quality(const ctsurg::TetMesh& m, bool from_mask = true) {
   const auto& q = m.quality;
   spdlog::info("tetmesh: {} nodes, {} tets, {} boundary faces", m.node_count(), m.tet_count(), m.boundary_face_count());
   spdlog::info("tetmesh: dihedral angles {:.2f} .. {:.2f} deg; {} slivers (a dihedral angle under {} deg); {} inverted",
@@ -41,6 +44,10 @@ void log_quality(const ctsurg::TetMesh& m) {
                         q.radius_edge_histogram[b]);
   }
   spdlog::info("tetmesh: radius-edge histogram: {}", hist);
+  if (!from_mask) {
+    spdlog::info("tetmesh: mesh volume {:.1f} mm^3", q.volume_mm3);
+    return;
+  }
   spdlog::info("tetmesh: mesh volume {:.1f} mm^3 vs mask voxels {:.1f} mm^3 ({:+.2f} %)", q.volume_mm3,
                m.mask_volume_mm3, 100.0 * (q.volume_mm3 - m.mask_volume_mm3) / m.mask_volume_mm3);
 }
@@ -48,7 +55,8 @@ void log_quality(const ctsurg::TetMesh& m) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::string input, output, source = "mask", optimiser = "none", labels_text;
+  std::string input, output, source = "mask", optimiser = "none", labels_text, import_path;
+  std::vector<std::string> files;
   ctsurg::TetMeshingOptions options;
   int64_t max_cells = 5'000'000;
   CLI::Option* cell_opt = nullptr;
@@ -60,10 +68,15 @@ int main(int argc, char** argv) {
       "exudation; fixed seed, deterministic) of the tissue labels of an occupancy grid: the full-resolution "
       "/mask (default) or the /grid/label lattice. Several labels give one subdomain each with conforming "
       "interfaces. Output by suffix: .h5 (ctsurg tet mesh + XDMF), .vtu, .msh (Gmsh 4.1), .mesh (Medit); LPS mm. "
-      "Criteria default to the grid's cell size.",
+      "Criteria default to the grid's cell size. With --import MESH OUTPUT: a tet mesh from another mesher "
+      "(.vtu ascii, .msh Gmsh 2.2/4.1 ASCII, .mesh Medit), checked and reoriented, with boundary faces and quality.",
       [&](CLI::App& app) {
-        app.add_option("input", input, "Occupancy grid file (ctsurg-grid, .h5)")->required();
-        app.add_option("output", output, "Mesh to write: .h5, .vtu, .msh or .mesh")->required();
+        app.add_option("files", files, "GRID.h5 (occupancy grid from ctsurg-grid; not with --import) OUTPUT (.h5, .vtu, .msh or .mesh)")
+            ->required()
+            ->expected(1, 2);
+        app.add_option("--import", import_path,
+                       "Read this tet mesh instead of meshing a grid: .vtu (ascii arrays), .msh (Gmsh 2.2/4.1 ASCII), "
+                       ".mesh (Medit ASCII); LPS mm");
         app.add_option("--source", source, "Labels to mesh: mask (full resolution, default) or grid (/grid/label)")
             ->check(CLI::IsMember({"mask", "grid"}));
         app.add_option("--labels", labels_text, "Comma-separated labels to mesh (default: every non-zero label)");
@@ -85,6 +98,12 @@ int main(int argc, char** argv) {
       },
       [&](const ctsurg::ToolContext& ctx) {
         const auto start = std::chrono::steady_clock::now();
+        if (import_path.empty() != (files.size() == 2)) {
+          throw ctsurg::InputError("files", "", import_path.empty() ? "give GRID.h5 OUTPUT (or --import MESH OUTPUT)"
+                                                                    : "with --import give only OUTPUT");
+        }
+        output = files.back();
+        if (files.size() == 2) input = files.front();
         const fs::path out_path = output;
         const std::string ext = out_path.extension().string();
         const bool h5 = ext == ".h5" || ext == ".hdf5";
@@ -109,6 +128,38 @@ int main(int argc, char** argv) {
         options.optimiser = optimiser == "odt"     ? ctsurg::TetOptimiser::odt
                             : optimiser == "lloyd" ? ctsurg::TetOptimiser::lloyd
                                                    : ctsurg::TetOptimiser::none;
+        const auto write = [&](const ctsurg::TetMesh& mesh, const std::string& source_file) {
+          if (h5) {
+            ctsurg::Provenance provenance{ctx.name, ctsurg::kVersion, ctx.command_line, {}, nlohmann::json::array()};
+            provenance.add_input(source_file);
+            ctsurg::write_tet_mesh_file(out_path, mesh, provenance);
+          } else {
+            ctsurg::AtomicOutput out(out_path);
+            ctsurg::export_tet_mesh(out.temp_path(), mesh, out_path);
+            out.commit();
+          }
+          spdlog::info("wrote {} in {:.2f} s", output,
+                       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+        };
+        if (!import_path.empty()) {
+          ctsurg::check_output_paths(h5 ? std::vector<fs::path>{out_path, ctsurg::xdmf_path_for(out_path)}
+                                        : std::vector<fs::path>{out_path},
+                                     {fs::path(import_path)});
+          const ctsurg::TetMeshImport imported = ctsurg::import_tet_mesh(import_path);
+          spdlog::info("{}: {} tet mesh", import_path, imported.format);
+          if (imported.flipped > 0) {
+            spdlog::warn("{}: {} of {} tets were negatively oriented; flipped (two nodes swapped)", import_path,
+                         imported.flipped, imported.mesh.tet_count());
+          }
+          if (imported.unused_nodes > 0) spdlog::warn("{}: {} nodes no tet uses were dropped", import_path, imported.unused_nodes);
+          if (imported.skipped_cells > 0) {
+            spdlog::info("{}: {} cells that are not 4-node tets skipped", import_path, imported.skipped_cells);
+          }
+          if (!imported.labels_from_file) spdlog::warn("{}: no label array; every tet is label 1", import_path);
+          log_quality(imported.mesh, false);
+          write(imported.mesh, import_path);
+          return;
+        }
         ctsurg::check_output_paths(h5 ? std::vector<fs::path>{out_path, ctsurg::xdmf_path_for(out_path)}
                                       : std::vector<fs::path>{out_path},
                                    {fs::path(input)});
@@ -143,16 +194,6 @@ int main(int argc, char** argv) {
 
         ctsurg::TetMesh mesh = ctsurg::tetrahedral_mesh(lattice, options, input + ": " + dataset);
         log_quality(mesh);
-        if (h5) {
-          ctsurg::Provenance provenance{ctx.name, ctsurg::kVersion, ctx.command_line, {}, nlohmann::json::array()};
-          provenance.add_input(input);
-          ctsurg::write_tet_mesh_file(out_path, mesh, provenance);
-        } else {
-          ctsurg::AtomicOutput out(out_path);
-          ctsurg::export_tet_mesh(out.temp_path(), mesh, out_path);
-          out.commit();
-        }
-        spdlog::info("wrote {} in {:.2f} s", output,
-                     std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+        write(mesh, input);
       });
 }

@@ -14,6 +14,7 @@
 #include "ctsurg/preprocess/mask_cleanup.h"
 #include "ctsurg/preprocess/occupancy_downsampling.h"
 #include "ctsurg/preprocess/preview_montage.h"
+#include "ctsurg/preprocess/slicer_segmentation.h"
 #include "ctsurg/preprocess/tissue_selection.h"
 
 #include <spdlog/spdlog.h>
@@ -22,6 +23,7 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <sstream>
 
 namespace fs = std::filesystem;
@@ -53,8 +55,25 @@ std::string format_geometry(const ctsurg::ImageGeometry& g) {
                      g.origin[2]);
 }
 
-// The label/mask volume: a ctsurg HDF5 volume file (its /hu volume) or any image file ITK reads.
-ctsurg::Volume<float> read_mask_volume(const fs::path& path) {
+// The label/mask volume: a ctsurg HDF5 volume file (its /hu volume), a 3D Slicer segmentation
+// (.seg.nrrd: its layers merged, placed exactly onto the CT's voxels, segment names added to
+// `names` unless --label-names gave one), or any image file ITK reads.
+ctsurg::Volume<float> read_mask_volume(const fs::path& path, const ctsurg::ImageGeometry& ct,
+                                       std::map<uint16_t, std::string>& names) {
+  if (ctsurg::is_slicer_segmentation_file(path)) {
+    std::vector<std::string> warnings;
+    const ctsurg::SlicerSegmentation seg = ctsurg::read_slicer_segmentation(path, &warnings);
+    for (const auto& w : warnings) spdlog::warn("{}", w);
+    for (const auto& s : seg.segments) {
+      spdlog::info("{}: Segment{} '{}' (id {}): layer {}, value {} -> label {}", path.string(), s.index, s.name, s.id,
+                   s.layer, s.label_value, s.label);
+      names.try_emplace(s.label, s.name);
+    }
+    const ctsurg::Volume<uint16_t> placed = ctsurg::place_on_lattice(seg.labels, ct, path.string());
+    ctsurg::Volume<float> labels(placed.geometry, 0.0f);
+    std::copy(placed.voxels.begin(), placed.voxels.end(), labels.voxels.begin());
+    return labels;
+  }
   const std::string ext = path.extension().string();
   if (ext == ".h5" || ext == ".hdf5") return ctsurg::read_hu_volume_file(path).hu;
   return ctsurg::read_image_file(path);
@@ -77,7 +96,7 @@ int main(int argc, char** argv) {
       "the occupancy grid of the spring-mass model: cubic cells, exact volume fractions, dominant labels, "
       "particles (ctsurg HDF5 + XDMF), plus a PNG preview montage.",
       [&](CLI::App& app) {
-        app.add_option("files", files, "CT.h5 (from ctsurg-import) [MASK (label volume over the CT; put onto its voxels)] OUTPUT.h5")
+        app.add_option("files", files, "CT.h5 (from ctsurg-import) [MASK (label volume over the CT, or a 3D Slicer .seg.nrrd; put onto its voxels)] OUTPUT.h5")
             ->required()
             ->expected(2, 3);
         auto* sel = app.add_option_group("selection", "exactly one of: HU window, mask file, --otsu");
@@ -152,7 +171,7 @@ int main(int argc, char** argv) {
         const auto& g = ct.hu.geometry;
         ctsurg::Volume<uint16_t> mask;
         if (by_mask) {
-          const ctsurg::Volume<float> labels = read_mask_volume(mask_path);
+          const ctsurg::Volume<float> labels = read_mask_volume(mask_path, g, names);
           mask = ctsurg::select_labels(labels, ids, mask_path.string());
           if (!labels.geometry.same_lattice(g)) {
             // Same voxels in another index order (e.g. rows flipped) resample exactly; anything else

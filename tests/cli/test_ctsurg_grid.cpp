@@ -3,6 +3,7 @@
 #include "ctsurg/core/hu_volume_file.h"
 #include "ctsurg/core/occupancy_grid_file.h"
 #include "ctsurg/core/provenance.h"
+#include "../preprocess/seg_nrrd_writer.h"
 #include "test_support.h"
 
 #include <gtest/gtest.h>
@@ -181,6 +182,68 @@ struct BadCase {
   std::vector<std::string> args;  // after CT (and, with a mask, before OUTPUT); {MASK} is replaced
   std::string must_mention;
 };
+
+// A 3D Slicer segmentation cropped to the ball's box (as Slicer saves it), on two layers: the
+// segments' names and values become the grid's labels; --labels picks by value; refusals name the
+// file and field.
+TEST(CtsurgGrid, SlicerSegmentationLabelsAndNames) {
+  TempDir dir;
+  const fs::path ct = write_ct(dir);
+  const auto g = ct_geometry();
+  ctsurg::test::SegNrrd s;
+  s.dims = {24, 24, 24};
+  s.spacing = {1.5, 1.5, 1.5};
+  const Eigen::Vector3d o = g.index_to_world(Eigen::Vector3d(8, 6, 4));
+  s.origin = {o[0], o[1], o[2]};
+  s.layers = 2;
+  s.segments = {{"kidney right", 0, 4}, {"kidney left", 1, 7}};
+  s.allocate();
+  for (int64_t k = 0; k < 24; ++k)
+    for (int64_t j = 0; j < 24; ++j)
+      for (int64_t i = 0; i < 24; ++i)
+        if (radius_at(g, i + 8, j + 6, k + 4) <= kRadiusMm) s.at(i + 8 < 19 ? 0 : 1, i, j, k) = i + 8 < 19 ? 4 : 7;
+  const fs::path seg = dir / "kidneys.seg.nrrd";
+  s.write(seg);
+  const auto r = run_tool("ctsurg-grid", {ct.string(), seg.string(), (dir / "k.h5").string(), "--voxel-mm", "3", "--no-preview"});
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto grid = ctsurg::read_occupancy_grid_file(dir / "k.h5");
+  EXPECT_EQ(grid.label_names, (std::map<uint16_t, std::string>{{4, "kidney right"}, {7, "kidney left"}}));
+  const double analytic_ml = 4.0 / 3.0 * std::numbers::pi * std::pow(kRadiusMm, 3) / 1000.0;
+  EXPECT_NEAR(tissue_ml(grid), analytic_ml, 0.03 * analytic_ml);
+  const auto left = run_tool("ctsurg-grid", {ct.string(), seg.string(), (dir / "l.h5").string(), "--labels", "7",
+                                             "--voxel-mm", "3", "--no-preview"});
+  ASSERT_EQ(left.exit_code, 0) << left.output;
+  EXPECT_EQ(ctsurg::read_occupancy_grid_file(dir / "l.h5").label_names,
+            (std::map<uint16_t, std::string>{{7, "kidney left"}}));
+
+  const auto before = ctsurg::test::files_in(dir.path());
+  const auto refused = [&](ctsurg::test::SegNrrd bad, const std::string& must) {
+    const fs::path p = dir / "bad.seg.nrrd";
+    bad.write(p);
+    const auto b = run_tool("ctsurg-grid", {ct.string(), p.string(), (dir / "out.h5").string(), "--no-preview"});
+    EXPECT_EQ(b.exit_code, 2) << must << "\n" << b.output;
+    EXPECT_NE(b.output.find(must), std::string::npos) << b.output;
+    fs::remove(p);
+    EXPECT_EQ(ctsurg::test::files_in(dir.path()), before) << must;
+  };
+  auto overlap = s;
+  overlap.at(1, 2, 12, 12) = 7;
+  overlap.at(0, 2, 12, 12) = 4;
+  refused(overlap, "bad.seg.nrrd: Segment<k>_Layer: the layers overlap: 1 voxels lie in two segments");
+  auto missing = s;
+  missing.segments[1].write_label_value = false;
+  refused(missing, "bad.seg.nrrd: Segment1_LabelValue: absent");
+  auto shifted = s;
+  shifted.origin[0] += 0.7;
+  refused(shifted, "bad.seg.nrrd: space origin: not on a voxel centre of the CT");
+  auto fine = s;
+  fine.spacing = {1.0, 1.0, 1.0};
+  refused(fine, "bad.seg.nrrd: space directions");
+  auto duplicate = s;
+  duplicate.segments[1].layer = 0;
+  duplicate.segments[1].value = 4;
+  refused(duplicate, "bad.seg.nrrd: Segment1_LabelValue: 4 is also the label value of Segment0");
+}
 
 TEST(CtsurgGrid, BadInputExitsTwoNamesTheProblemAndWritesNothing) {
   TempDir dir;

@@ -10,6 +10,7 @@
 
 #include <gtest/gtest.h>
 #include <hdf5.h>
+#include <spdlog/fmt/fmt.h>
 
 #include <Eigen/Geometry>
 
@@ -124,6 +125,55 @@ TEST(CtsurgSurface, ExportsGlbStlObjPly) {
   for (const auto& f : ctsurg::test::files_in(dir.path())) EXPECT_EQ(f.filename().string().rfind(".tmp-", 0), std::string::npos) << f;
 }
 
+// .vtk and .vtp for 3D Slicer: the SPACE=LPS marker, normals as point data, read back by VTK when
+// python3-vtk9 is installed.
+TEST(CtsurgSurface, ExportsVtkAndVtpWithTheLpsMarker) {
+  TempDir dir;
+  const fs::path grid = write_grid(dir, "g.h5");
+  ASSERT_EQ(run_tool("ctsurg-surface", {grid.string(), (dir / "s.h5").string()}).exit_code, 0);
+  const auto mesh = ctsurg::read_surface_mesh_file(dir / "s.h5");
+  for (const std::string name : {"s.vtk", "s.vtp"}) {
+    const auto r = run_tool("ctsurg-surface", {grid.string(), (dir / name).string()});
+    ASSERT_EQ(r.exit_code, 0) << name << "\n" << r.output;
+  }
+  std::ifstream vtk(dir / "s.vtk");
+  std::string l1, l2;
+  std::getline(vtk, l1);
+  std::getline(vtk, l2);
+  EXPECT_EQ(l1, "# vtk DataFile Version 4.2");
+  EXPECT_NE(l2.find("SPACE=LPS"), std::string::npos) << l2;
+  const std::string vtp = ctsurg::test::read_bytes(dir / "s.vtp");
+  EXPECT_NE(vtp.find("Name=\"SPACE\""), std::string::npos);
+  EXPECT_NE(vtp.find("Name=\"Normals\""), std::string::npos);
+  std::string python;
+  for (const std::string candidate : {"/usr/bin/python3", "python3"}) {
+    if (ctsurg::test::run_shell(candidate + " -c 'import vtk' 2>/dev/null").exit_code == 0) {
+      python = candidate;
+      break;
+    }
+  }
+  if (python.empty()) GTEST_SKIP() << "python3-vtk9 absent";
+  const std::string script =
+      "import vtk\n"
+      "a = vtk.vtkPolyDataReader(); a.SetFileName('" + (dir / "s.vtk").string() + "'); a.Update()\n"
+      "b = vtk.vtkXMLPolyDataReader(); b.SetFileName('" + (dir / "s.vtp").string() + "'); b.Update()\n"
+      "for r in (a, b):\n"
+      "  g = r.GetOutput(); n = g.GetPointData().GetNormals()\n"
+      "  print('MESH', g.GetNumberOfPoints(), g.GetNumberOfPolys(), n.GetNumberOfTuples(), g.GetPoint(0)[2])\n"
+      "print('HEADER', a.GetHeader())\n"
+      "print('SPACE', b.GetOutput().GetFieldData().GetAbstractArray('SPACE').GetValue(0))\n";
+  const fs::path py = dir / "check.py";
+  std::ofstream(py) << script;
+  const auto r = ctsurg::test::run_shell(python + " " + py.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const std::string expect = fmt::format("MESH {} {} {}", mesh.vertex_count(), mesh.triangle_count(), mesh.vertex_count());
+  std::size_t first = r.output.find(expect);
+  ASSERT_NE(first, std::string::npos) << r.output;
+  EXPECT_NE(r.output.find(expect, first + 1), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("SPACE=LPS"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("SPACE LPS"), std::string::npos) << r.output;
+}
+
 TEST(CtsurgSurface, RerunIsByteIdentical) {
   TempDir dir;
   const fs::path grid = write_grid(dir, "g.h5");
@@ -217,7 +267,7 @@ TEST(CtsurgSurface, BadInputExitsTwoAndLeavesNoFile) {
     EXPECT_EQ(ctsurg::test::files_in(dir.path()), before) << r.output;
   };
   expect_bad({empty.string(), (dir / "s.h5").string()}, "no surface at iso 0.5");
-  expect_bad({grid.string(), (dir / "s.vtk").string()}, "unknown output format");
+  expect_bad({grid.string(), (dir / "s.wrl").string()}, "unknown output format");
   expect_bad({(dir / "missing.h5").string(), (dir / "s.h5").string()}, "missing.h5");
   expect_bad({grid.string(), (dir / "no_such_folder" / "s.h5").string()}, "no_such_folder");
   expect_bad({grid.string(), (dir / "s.h5").string(), "--iso", "nan"}, "--iso");

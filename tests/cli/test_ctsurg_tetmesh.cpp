@@ -106,6 +106,36 @@ TEST(CtsurgTetmesh, ExportsVtuMshMesh) {
   for (const auto& f : ctsurg::test::files_in(dir.path())) EXPECT_EQ(f.filename().string().rfind(".tmp-", 0), std::string::npos) << f;
 }
 
+// --import: a mesh from another mesher (here a Gmsh 2.2 file with one inverted tet) becomes a ctsurg
+// tet mesh file with boundary faces and quality; a bad file is exit 2 naming the element.
+TEST(CtsurgTetmesh, ImportsAnotherMeshersFile) {
+  TempDir dir;
+  std::ofstream(dir / "two.msh") << "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n5\n1 0 0 0\n2 10 0 0\n3 0 10 0\n"
+                                    "4 0 0 10\n5 10 10 10\n$EndNodes\n$Elements\n2\n1 4 2 2 1 1 2 3 4\n"
+                                    "2 4 2 3 1 5 2 3 4\n$EndElements\n";
+  const auto r = run_tool("ctsurg-tetmesh", {"--import", (dir / "two.msh").string(), (dir / "two.h5").string()});
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("1 of 2 tets were negatively oriented; flipped"), std::string::npos) << r.output;
+  const auto m = ctsurg::read_tet_mesh_file(dir / "two.h5");
+  EXPECT_EQ(m.tet_count(), 2);
+  EXPECT_EQ(m.tet_labels, (std::vector<uint16_t>{2, 3}));
+  EXPECT_EQ(m.boundary_face_count(), 7);  // 6 skin faces and the interface
+  EXPECT_EQ(m.quality.inverted, 0);
+  const auto vtu = run_tool("ctsurg-tetmesh", {"--import", (dir / "two.msh").string(), (dir / "two.vtu").string()});
+  ASSERT_EQ(vtu.exit_code, 0) << vtu.output;
+  EXPECT_NE(ctsurg::test::read_bytes(dir / "two.vtu").find("Name=\"labels\""), std::string::npos);
+
+  std::ofstream(dir / "bad.mesh") << "MeshVersionFormatted 2\nDimension 3\nVertices\n4\n0 0 0 0\n1 0 0 0\n0 1 0 0\n"
+                                     "0 0 1 0\nTetrahedra\n1\n1 2 3 7 1\nEnd\n";
+  const auto before = ctsurg::test::files_in(dir.path());
+  const auto bad = run_tool("ctsurg-tetmesh", {"--import", (dir / "bad.mesh").string(), (dir / "bad.h5").string()});
+  EXPECT_EQ(bad.exit_code, 2) << bad.output;
+  EXPECT_NE(bad.output.find("bad.mesh: tet 1: node index 7 out of range"), std::string::npos) << bad.output;
+  const auto usage = run_tool("ctsurg-tetmesh", {"--import", (dir / "two.msh").string(), "g.h5", (dir / "x.h5").string()});
+  EXPECT_EQ(usage.exit_code, 2) << usage.output;
+  EXPECT_EQ(ctsurg::test::files_in(dir.path()), before);
+}
+
 TEST(CtsurgTetmesh, RerunIsByteIdentical) {
   TempDir dir;
   const fs::path grid = write_grid(dir, "g.h5");

@@ -10,6 +10,7 @@ rm -rf "$out"
 mkdir -p "$out"/{fuzz_nifti,fuzz_nrrd,fuzz_metaimage,fuzz_dicom_folder,fuzz_scenario}
 mkdir -p "$out"/{fuzz_hu_volume_file,fuzz_occupancy_grid_file,fuzz_surface_mesh_file,fuzz_tet_mesh_file,fuzz_trajectory_file,fuzz_centerline_file}
 mkdir -p "$out"/{fuzz_stl,fuzz_obj,fuzz_ply}
+mkdir -p "$out"/{fuzz_seg_nrrd,fuzz_vtu,fuzz_msh,fuzz_medit}
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 q="-q"
@@ -55,6 +56,35 @@ cp "$work/pull.yaml" "$out/fuzz_scenario/"
   --label-out "$work/ring.nii.gz"
 "$bin/ctsurg-centerline" $q "$work/ring.nii.gz" --break-loops -o "$work/centerline.h5"
 cp "$work/centerline.h5" "$out/fuzz_centerline_file/"
+
+# Another mesher's tet mesh in each import format: the shell's mesh exported, then converted by --import.
+"$bin/ctsurg-tetmesh" $q "$work/grid.h5" "$work/shell_tets.vtu" --cell-size 4
+"$bin/ctsurg-tetmesh" $q --import "$work/shell_tets.vtu" "$work/shell_tets.msh"
+"$bin/ctsurg-tetmesh" $q --import "$work/shell_tets.vtu" "$work/shell_tets.mesh"
+cp "$work/shell_tets.vtu" "$out/fuzz_vtu/"
+cp "$work/shell_tets.msh" "$out/fuzz_msh/"
+cp "$work/shell_tets.mesh" "$out/fuzz_medit/"
+# 3D Slicer segmentations: one layer (raw) and two layers (gzip), 4 x 3 x 2 voxels.
+python3 - "$out/fuzz_seg_nrrd" <<'PY'
+import gzip, sys
+def seg(layers, encoding):
+    n = 4 * 3 * 2
+    data = bytes((i % 3) if l == 0 else (1 if i % 5 == 0 else 0) for l in range(layers) for i in range(n))
+    if layers > 1:  # NRRD's fastest axis is the list: interleave the layers
+        data = bytes(data[l * n + i] for i in range(n) for l in range(layers))
+    head = ["NRRD0004", "type: unsigned char", f"dimension: {3 + (layers > 1)}", "space: left-posterior-superior",
+            "sizes: " + (f"{layers} " if layers > 1 else "") + "4 3 2",
+            "space directions: " + ("none " if layers > 1 else "") + "(1.5,0,0) (0,1.5,0) (0,0,2)",
+            "kinds: " + ("list " if layers > 1 else "") + "domain domain domain", f"encoding: {encoding}",
+            "space origin: (-3,2,10)"]
+    segments = [("kidney", 1, 0), ("liver", 2, 0)] + ([("vessel", 1, 1)] if layers > 1 else [])
+    for k, (name, value, layer) in enumerate(segments):
+        head += [f"Segment{k}_ID:={name}", f"Segment{k}_Name:={name}", f"Segment{k}_LabelValue:={value}",
+                 f"Segment{k}_Layer:={layer}", f"Segment{k}_Color:=0.5 0.2 0.1", f"Segment{k}_Extent:=0 3 0 2 0 1"]
+    return ("\n".join(head) + "\n\n").encode() + (gzip.compress(data, mtime=0) if encoding == "gzip" else data)
+open(sys.argv[1] + "/one_layer.seg.nrrd", "wb").write(seg(1, "raw"))
+open(sys.argv[1] + "/two_layers.seg.nrrd", "wb").write(seg(2, "gzip"))
+PY
 
 python3 "$root/tests/fuzz/make_dicom_seed.py" "$out/fuzz_dicom_folder/two_slices.bin"
 echo "fuzz seeds: $(find "$out" -type f | wc -l) files, $(du -sk "$out" | cut -f1) KiB in $out"

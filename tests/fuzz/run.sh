@@ -16,7 +16,8 @@ tests/fuzz/make_seeds.sh build/bin build-fuzz/seeds
 targets=("$@")
 if ((${#targets[@]} == 0)); then
   targets=(fuzz_nifti fuzz_nrrd fuzz_metaimage fuzz_dicom_folder fuzz_scenario fuzz_hu_volume_file
-           fuzz_occupancy_grid_file fuzz_surface_mesh_file fuzz_tet_mesh_file fuzz_trajectory_file fuzz_centerline_file fuzz_stl fuzz_obj fuzz_ply)
+           fuzz_occupancy_grid_file fuzz_surface_mesh_file fuzz_tet_mesh_file fuzz_trajectory_file fuzz_centerline_file fuzz_stl fuzz_obj fuzz_ply
+           fuzz_seg_nrrd fuzz_vtu fuzz_msh fuzz_medit)
 fi
 mkdir -p build-fuzz/findings build-fuzz/logs
 # Third-party leaks on error paths are suppressed (tests/fuzz/lsan.supp says which and why).

@@ -70,7 +70,7 @@ TEST(TetMeshExport, VtuReadsBackInVtk) {
   if (python.empty()) GTEST_SKIP() << "python3-vtk9 absent";
   const std::string script =
       "import vtk; r = vtk.vtkXMLUnstructuredGridReader(); r.SetFileName('" + (dir / "m.vtu").string() +
-      "'); r.Update(); g = r.GetOutput(); l = g.GetCellData().GetArray('label'); p = g.GetPoint(4); "
+      "'); r.Update(); g = r.GetOutput(); l = g.GetCellData().GetArray('labels'); p = g.GetPoint(4); "
       "t = [g.GetPoint(g.GetCell(0).GetPointId(i)) for i in range(4)]; "
       "print('VTK', g.GetNumberOfPoints(), g.GetNumberOfCells(), g.GetCellType(0), g.GetCellType(1), "
       "l.GetValue(0), l.GetValue(1), p[0], p[1], p[2], round(vtk.vtkTetra.ComputeVolume(*t), 6))";

@@ -462,12 +462,17 @@ void FemEngine::equilibrium(const std::vector<ToolInput>& tools, double time) {
   loads.forces = holds_.nodal_forces();
   FemStaticResult r;
   if (local_) {
-    // The region grows from every node a tool holds or loads.
-    seeds_ = grab_nodes_;
-    const std::vector<double>& f = holds_.nodal_forces();
-    for (size_t i = 0; i < f.size(); i += 3)
-      if (f[i] != 0 || f[i + 1] != 0 || f[i + 2] != 0) seeds_.push_back(static_cast<int32_t>(i / 3));
-    r = local_->solve(grab_nodes_, grab_displacements_, loads, seeds_, solves_ > 0 ? &u_ : nullptr);
+    // The region grows from every node a tool holds or loads, as far as that tool's radius (its own
+    // local_region_mm, or the engine's).
+    seeds_.clear();
+    seed_radii_.clear();
+    for (size_t t = 0; t < tools.size(); ++t) {
+      if (tools[t].kind != ToolKind::grab && tools[t].kind != ToolKind::force) continue;
+      const std::vector<int32_t>& held = holds_.held_nodes(t);
+      seeds_.insert(seeds_.end(), held.begin(), held.end());
+      seed_radii_.resize(seeds_.size(), tools[t].local_region_mm > 0 ? tools[t].local_region_mm : *options_.local_region_mm);
+    }
+    r = local_->solve(grab_nodes_, grab_displacements_, loads, seeds_, solves_ > 0 ? &u_ : nullptr, &seed_radii_);
   } else if (linear_) {
     r = linear_->solve(grab_nodes_, grab_displacements_, loads);
   } else {

@@ -46,6 +46,10 @@ struct FemLinearStaticSolver::Impl {
   Eigen::VectorXd gravity_column;                    // K_ss^-1 M g for gravity_cached (empty: none)
   std::vector<int32_t> grab_cached;                  // the node set whose C_pp factor is kept
   Eigen::LLT<Eigen::MatrixXd> grab_factor;
+  // Grabs of more than max_grab_nodes nodes: K_ff factorised for the node set direct_cached.
+  std::vector<int32_t> direct_cached;
+  std::unique_ptr<SparseCholesky> direct_factor;
+  std::vector<int32_t> direct_index;                 // s: index in f, or -1 (on p)
 
   Impl(const FemModel& m, const FemBoundaryConditions& supports, const FemLinearSolverOptions& o)
       : model(m), options(o), threads(o.threads > 0 ? o.threads : cpu::thread_count(0, m.tet_count())) {
@@ -60,6 +64,7 @@ struct FemLinearStaticSolver::Impl {
     if (!(o.residual_tolerance > 0 && o.residual_tolerance < 1)) throw InputError(kWhere, "residual_tolerance", "must be in (0, 1)");
     if (o.max_refinements < 0 || o.max_refinements > 10) throw InputError(kWhere, "max_refinements", "must be in [0, 10]");
     if (o.max_force_nodes < 0) throw InputError(kWhere, "max_force_nodes", "must be >= 0");
+    if (o.max_grab_nodes < 0) throw InputError(kWhere, "max_grab_nodes", "must be >= 0");
     if (o.threads < 0) throw InputError(kWhere, "threads", "must be >= 0");
     supported.assign(3 * static_cast<std::size_t>(n), 0);
     for (int32_t i : supports.fixed_nodes) {
@@ -146,6 +151,34 @@ struct FemLinearStaticSolver::Impl {
     stats.column_seconds += seconds_since(t0);
   }
 
+  // K_ff = K_ss without the rows and columns p (the grabbed free components of `gnodes`), analysed and
+  // factorised into direct_factor; direct_index maps s to f.
+  void factor_without(const std::vector<int32_t>& p, const std::vector<int32_t>& gnodes) {
+    const auto t0 = Clock::now();
+    const Eigen::Index s = k.rows();
+    direct_index.assign(static_cast<std::size_t>(s), 0);
+    for (int32_t j : p) direct_index[j] = -1;
+    int32_t nf = 0;
+    for (Eigen::Index i = 0; i < s; ++i)
+      if (direct_index[i] >= 0) direct_index[i] = nf++;
+    std::vector<Eigen::Triplet<double, int>> t;
+    t.reserve(static_cast<std::size_t>(k.nonZeros()));
+    for (Eigen::Index c = 0; c < k.outerSize(); ++c) {
+      if (direct_index[c] < 0) continue;
+      for (SpMat::InnerIterator it(k, c); it; ++it)
+        if (direct_index[it.row()] >= 0) t.emplace_back(direct_index[it.row()], direct_index[c], it.value());
+    }
+    SpMat kff(nf, nf);
+    kff.setFromTriplets(t.begin(), t.end());
+    kff.makeCompressed();
+    direct_factor = std::make_unique<SparseCholesky>(kWhere);
+    direct_factor->analyze(nf, kff.outerIndexPtr(), kff.innerIndexPtr());
+    if (direct_factor->factorize(kff.valuePtr()) >= 0)
+      throw InputError(kWhere, "prescribed_nodes", "the stiffness without the grabbed components is not positive definite");
+    direct_cached = gnodes;
+    stats.column_seconds += seconds_since(t0);
+  }
+
   // u = K_ss^-1 b + C_:p lambda with (u)_p = target (p: free indices, slots: their columns).
   void constrain(Eigen::VectorXd& u, const std::vector<int32_t>& p, const std::vector<int32_t>& slots, const Eigen::VectorXd& target) {
     if (p.empty()) return;
@@ -199,9 +232,13 @@ struct FemLinearStaticSolver::Impl {
     for (std::size_t d = 0; d < n3; ++d)
       if (free_index[d] >= 0) f[free_index[d]] = fext[d];
 
+    // A large grab: K_ff factorised per node set (see the header), no columns.
+    const bool direct = static_cast<int>(gnodes.size()) > options.max_grab_nodes;
     // u_0 = K_ss^-1 f: columns of the loaded nodes plus gravity's, or one back-substitution.
     Eigen::VectorXd u = Eigen::VectorXd::Zero(s);
-    if (static_cast<int>(loaded.size()) <= options.max_force_nodes) {
+    if (direct) {
+      // u comes from the K_ff solve below.
+    } else if (static_cast<int>(loaded.size()) <= options.max_force_nodes) {
       ensure_columns(loaded);
       for (int32_t i : loaded)
         for (int a = 0; a < 3; ++a)
@@ -225,17 +262,43 @@ struct FemLinearStaticSolver::Impl {
     // The grab: prescribed free components p, their targets, and C_pp's factor (kept per node set).
     std::vector<int32_t> p, slots;
     Eigen::VectorXd target(static_cast<Eigen::Index>(3 * gnodes.size()));
-    ensure_columns(gnodes);
+    if (!direct) ensure_columns(gnodes);
     for (std::size_t g = 0; g < gnodes.size(); ++g)
       for (int a = 0; a < 3; ++a) {
         const int32_t j = free_index[3 * gnodes[g] + a];
         if (j < 0) continue;
         target[static_cast<Eigen::Index>(p.size())] = gdisp[3 * g + a];
         p.push_back(j);
-        slots.push_back(node_columns[gnodes[g]][a]);
+        if (!direct) slots.push_back(node_columns[gnodes[g]][a]);
       }
     target.conservativeResize(static_cast<Eigen::Index>(p.size()));
-    if (!p.empty() && gnodes != grab_cached) {
+    if (direct && gnodes != direct_cached) factor_without(p, gnodes);
+    // du = the correction for a residual rf on s (zero on p): with the columns, K_ss^-1 rf then the
+    // constraint; directly, K_ff^-1 rf_f.
+    const auto correction = [&](const Eigen::VectorXd& rf, const Eigen::VectorXd& on_p) {
+      Eigen::VectorXd du = Eigen::VectorXd::Zero(s);
+      if (direct) {
+        Eigen::VectorXd bf(direct_factor->size());
+        for (Eigen::Index i = 0; i < s; ++i)
+          if (direct_index[i] >= 0) bf[direct_index[i]] = rf[i];
+        direct_factor->solve(bf.data(), bf.data());
+        for (Eigen::Index i = 0; i < s; ++i)
+          if (direct_index[i] >= 0) du[i] = bf[direct_index[i]];
+        for (std::size_t i = 0; i < p.size(); ++i) du[p[i]] = on_p[static_cast<Eigen::Index>(i)];
+      } else {
+        cholesky.solve(rf.data(), du.data());
+        constrain(du, p, slots, on_p);
+      }
+      return du;
+    };
+    if (direct) {
+      // u = d on p; u_f = K_ff^-1 (f_f - K_fp d).
+      Eigen::VectorXd d = Eigen::VectorXd::Zero(s);
+      for (std::size_t i = 0; i < p.size(); ++i) d[p[i]] = target[static_cast<Eigen::Index>(i)];
+      const Eigen::VectorXd rhs = f - k * d;
+      u = correction(rhs, target);
+    }
+    if (!direct && !p.empty() && gnodes != grab_cached) {
       const Eigen::Index m = static_cast<Eigen::Index>(p.size());
       Eigen::MatrixXd c(m, m);
       for (Eigen::Index j = 0; j < m; ++j)
@@ -245,7 +308,7 @@ struct FemLinearStaticSolver::Impl {
       if (grab_factor.info() != Eigen::Success)
         throw InputError(kWhere, "prescribed_nodes", "the grabbed nodes' compliance matrix is singular (repeated or coincident nodes?)");
     }
-    constrain(u, p, slots, target);
+    if (!direct) constrain(u, p, slots, target);
 
     // Self-check: the true residual on f = s \ p, against the residual of "d on p, 0 elsewhere".
     std::vector<uint8_t> on_p(static_cast<std::size_t>(s), 0);
@@ -273,10 +336,7 @@ struct FemLinearStaticSolver::Impl {
     for (int it = 0; it < options.max_refinements && rnorm > goal; ++it) {  // one refinement: u += K_ff^-1 (-r_f)
       Eigen::VectorXd rf = -r;
       for (int32_t j : p) rf[j] = 0;
-      Eigen::VectorXd du(s);
-      cholesky.solve(rf.data(), du.data());
-      constrain(du, p, slots, Eigen::VectorXd::Zero(static_cast<Eigen::Index>(p.size())));
-      uu.col(0) += du;
+      uu.col(0) += correction(rf, Eigen::VectorXd::Zero(static_cast<Eigen::Index>(p.size())));
       for (std::size_t i = 0; i < p.size(); ++i) uu(p[i], 0) = target[static_cast<Eigen::Index>(i)];
       r = k * uu.col(0) - f;
       rnorm = free_norm(r);

@@ -45,18 +45,22 @@ void edge_adjacency(const FemModel& model, std::vector<int32_t>& offsets, std::v
   offsets = std::move(compact);
 }
 
-// Dijkstra from all seeds at once over the edge graph at rest lengths, up to limit_mm (dist: #N).
+// Dijkstra from all seeds at once over the edge graph at rest lengths, up to limit_mm (dist: #N). With
+// `start` (#seeds, mm, >= 0), seed k starts at distance start[k] instead of 0: a seed whose own radius is
+// R_k starts at limit - R_k, so "dist <= limit" means "within R_k of seed k" for one pass over all tools.
 void geodesic(const FemModel& model, const std::vector<int32_t>& offsets, const std::vector<int32_t>& list,
-              const std::vector<int32_t>& seeds, double limit_mm, std::vector<double>& dist) {
+              const std::vector<int32_t>& seeds, double limit_mm, std::vector<double>& dist, const std::vector<double>* start = nullptr) {
   const int32_t n = model.node_count();
   dist.assign(static_cast<size_t>(n), std::numeric_limits<double>::infinity());
   using Item = std::pair<double, int32_t>;
   std::priority_queue<Item, std::vector<Item>, std::greater<Item>> queue;
-  for (const int32_t s : seeds) {
+  for (size_t k = 0; k < seeds.size(); ++k) {
+    const int32_t s = seeds[k];
     if (s < 0 || s >= n) throw InputError(kWhere, "seeds", "node " + std::to_string(s) + " out of range (0.." + std::to_string(n - 1) + ")");
-    if (dist[static_cast<size_t>(s)] > 0) {
-      dist[static_cast<size_t>(s)] = 0;
-      queue.emplace(0.0, s);
+    const double d0 = start ? (*start)[k] : 0.0;
+    if (d0 <= limit_mm && dist[static_cast<size_t>(s)] > d0) {
+      dist[static_cast<size_t>(s)] = d0;
+      queue.emplace(d0, s);
     }
   }
   const double* x = model.nodes.data();
@@ -160,14 +164,29 @@ struct FemLocalRegionSolver::Impl {
   }
 
   // Step 2: the region's tets from the seeds' distances; `interface` and `flags` for them.
-  std::vector<int32_t> select(const std::vector<int32_t>& seeds, const std::vector<int32_t>& prescribed) {
+  // seed_radii (optional, #seeds mm): each seed's own radius instead of options.radius_mm.
+  std::vector<int32_t> select(const std::vector<int32_t>& seeds, const std::vector<int32_t>& prescribed,
+                              const std::vector<double>* seed_radii) {
     const int32_t n = model.node_count();
-    geodesic(model, adj_offsets, adj_list, seeds, options.radius_mm, dist);
+    double limit = options.radius_mm;
+    std::vector<double> start;
+    if (seed_radii) {
+      if (seed_radii->size() != seeds.size()) {
+        throw InputError(kWhere, "seed_radii", std::to_string(seed_radii->size()) + " radii for " + std::to_string(seeds.size()) + " seeds");
+      }
+      for (const double r : *seed_radii) {
+        if (!(r > 0) || !std::isfinite(r)) throw InputError(kWhere, "seed_radii", "must be positive numbers of mm (got " + std::to_string(r) + ")");
+        limit = std::max(limit, r);
+      }
+      start.resize(seeds.size());
+      for (size_t k = 0; k < seeds.size(); ++k) start[k] = limit - (*seed_radii)[k];
+    }
+    geodesic(model, adj_offsets, adj_list, seeds, limit, dist, seed_radii ? &start : nullptr);
     std::vector<uint8_t> in_tet(static_cast<size_t>(model.tet_count()), 0);
     std::vector<int32_t> chosen;
     for (int32_t e = 0; e < model.tet_count(); ++e) {
       bool all = true;
-      for (size_t a = 0; a < 4 && all; ++a) all = dist[static_cast<size_t>(model.tets[4 * static_cast<size_t>(e) + a])] <= options.radius_mm;
+      for (size_t a = 0; a < 4 && all; ++a) all = dist[static_cast<size_t>(model.tets[4 * static_cast<size_t>(e) + a])] <= limit;
       if (all) {
         in_tet[static_cast<size_t>(e)] = 1;
         chosen.push_back(e);
@@ -293,7 +312,8 @@ const std::vector<uint8_t>& FemLocalRegionSolver::node_region() const { return i
 const FemLinearSolverStats& FemLocalRegionSolver::linear_stats() const { return impl_->global->stats(); }
 
 FemStaticResult FemLocalRegionSolver::solve(const std::vector<int32_t>& prescribed_nodes, const std::vector<double>& prescribed_displacements,
-                                            const FemLoads& loads, const std::vector<int32_t>& seeds, const std::vector<double>* initial) {
+                                            const FemLoads& loads, const std::vector<int32_t>& seeds, const std::vector<double>* initial,
+                                            const std::vector<double>* seed_radii) {
   Impl& s = *impl_;
   const auto t0 = std::chrono::steady_clock::now();
   const size_t n = static_cast<size_t>(s.model.node_count());
@@ -310,7 +330,7 @@ FemStaticResult FemLocalRegionSolver::solve(const std::vector<int32_t>& prescrib
   for (size_t g = 0; g < prescribed_nodes.size(); ++g) s.grab_of[static_cast<size_t>(prescribed_nodes[g])] = static_cast<int32_t>(g);
 
   // 2. The region, its model and solver rebuilt when its tets changed.
-  std::vector<int32_t> kept = s.select(seeds, prescribed_nodes);
+  std::vector<int32_t> kept = s.select(seeds, prescribed_nodes, seed_radii);
   if (kept != s.tets) {
     s.rebuild(std::move(kept));
     report.rebuilt = true;

@@ -44,6 +44,11 @@ void FemToolHolds::nodes_added(const std::vector<int32_t>& parents) {
 
 bool FemToolHolds::engaged(size_t tool) const { return tool < holds_.size() && !holds_[tool].nodes.empty(); }
 
+const std::vector<int32_t>& FemToolHolds::held_nodes(size_t tool) const {
+  static const std::vector<int32_t> none;
+  return tool < holds_.size() ? holds_[tool].nodes : none;
+}
+
 bool FemToolHolds::captures(const std::vector<ToolInput>& tools) const {
   for (size_t i = 0; i < tools.size(); ++i) {
     if (tools[i].kind != ToolKind::grab && tools[i].kind != ToolKind::force) continue;

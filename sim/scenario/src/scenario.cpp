@@ -143,10 +143,11 @@ ToolAction tool_of(const YamlField& item, const fs::path& base_dir, bool grab_ro
   if (key == "suture") return suture_of(f, item.path() + " (suture)");
   if (key == "clamp") {
     // A clamp: a grab that stays where it is put (one keyframe), pinning what it captures for its window.
-    f.only({"start_s", "end_s", "radius_mm", "position_mm", "at_fraction", "snap_to_tissue"});
+    f.only({"start_s", "end_s", "radius_mm", "position_mm", "at_fraction", "snap_to_tissue", "local_region_mm"});
     t.kind = ToolKind::grab;
     t.label = item.path() + " (clamp)";
     t.radius_mm = f.child("radius_mm").positive();
+    if (f.has("local_region_mm")) t.local_region_mm = f.child("local_region_mm").positive();
     t.start_s = f.has("start_s") ? f.child("start_s").non_negative() : 0.0;
     t.end_s = f.has("end_s") ? f.child("end_s").positive() : std::numeric_limits<double>::infinity();
     if (!(t.end_s > t.start_s)) f.child("end_s").fail("must be after start_s");
@@ -168,15 +169,20 @@ ToolAction tool_of(const YamlField& item, const fs::path& base_dir, bool grab_ro
     t.blade_edge_mm = f.child("blade_edge_mm").vec3();
     if (t.blade_edge_mm == std::array<double, 3>{0, 0, 0}) f.child("blade_edge_mm").fail("the blade edge must not be zero");
   } else if (t.kind == ToolKind::force) {
-    f.only({"start_s", "end_s", "path", "radius_mm", "force_n", "snap_to_tissue"});
+    f.only({"start_s", "end_s", "path", "radius_mm", "force_n", "snap_to_tissue", "local_region_mm"});
     t.radius_mm = f.child("radius_mm").positive();
     t.force_n = f.child("force_n").vec3();
+    if (f.has("local_region_mm")) t.local_region_mm = f.child("local_region_mm").positive();
   } else if (t.kind == ToolKind::instrument) {
     f.only({"start_s", "end_s", "path", "mesh", "grid_spacing_mm", "snap_to_tissue"});
     const std::string mesh = f.child("mesh").text();
     if (mesh.empty()) f.child("mesh").fail("must name a .stl, .obj or .ply file");
     t.instrument_mesh = resolve(base_dir, mesh);
     if (f.has("grid_spacing_mm")) t.instrument_spacing_mm = f.child("grid_spacing_mm").positive();
+  } else if (t.kind == ToolKind::grab) {
+    f.only({"start_s", "end_s", "path", "radius_mm", "snap_to_tissue", "local_region_mm"});
+    t.radius_mm = f.child("radius_mm").positive();
+    if (f.has("local_region_mm")) t.local_region_mm = f.child("local_region_mm").positive();
   } else {
     f.only({"start_s", "end_s", "path", "radius_mm", "snap_to_tissue"});
     t.radius_mm = f.child("radius_mm").positive();
@@ -568,6 +574,15 @@ static Scenario parse_fields(const std::string& text, const fs::path& file, cons
       bool acts = false;
       for (const ToolAction& a : s.tools) acts = acts || a.kind == ToolKind::grab || a.kind == ToolKind::force;
       if (!acts) r.fail("needs a grab or force tool: the region grows around the nodes the tools hold or load");
+    }
+  }
+  // A tool's own local region radius needs the FEM local region.
+  for (size_t i = 0; i < s.tools.size(); ++i) {
+    if (s.tools[i].local_region_mm > 0 && !(s.solver.local_region_mm > 0)) {
+      const YamlField item = top.child("tools").items()[i];
+      item.child(item.has("grab") ? "grab" : item.has("clamp") ? "clamp" : "force")
+          .child("local_region_mm")
+          .fail("a tool's own local region radius needs solver: {local_region: {radius_mm: R}} (kind: fem, solver: static)");
     }
   }
   return s;

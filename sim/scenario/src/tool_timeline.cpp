@@ -161,6 +161,7 @@ void ToolTimeline::inputs(double t0, double t1, double min_sweep_mm, std::vector
     in.instrument = tool.instrument;
     in.orientation = tool.path.rotation_at(t1);
     in.end_s = spec.end_s;
+    in.local_region_mm = spec.local_region_mm;
     if (spec.kind == ToolKind::suture) {
       in.stitches = tool.stitch_points;
       in.stitch_fields = tool.stitch_fields;

@@ -109,7 +109,8 @@ TEST(FemLocalRegion, ConvergesToTheFullNonlinearSolveAsTheRegionGrows) {
       EXPECT_NEAR(res.displacements[3 * static_cast<size_t>(grab[g]) + 2], 2.4, 1e-12);
     if (r == 5.0) {
       // Against the linear solve of the whole mesh: no worse with the smallest region.
-      FemLinearStaticSolver lin(block(FemMaterialModel::linear), base_fixed(m));
+      const FemModel linear_model = block(FemMaterialModel::linear);  // the solver keeps a reference to it
+      FemLinearStaticSolver lin(linear_model, base_fixed(m));
       linear_error = test::max_abs_difference(lin.solve(grab, d, loads).displacements, full.displacements);
       EXPECT_LE(error, linear_error + 1e-6);
     }
@@ -151,7 +152,8 @@ TEST(FemLocalRegion, ATinyLoadGivesTheLinearSolution) {
   const FemModel m = block();
   const std::vector<int32_t> grab = top_nodes_near(m, 8, 8);
   const std::vector<double> d = lifted(grab.size(), {1e-5, 0, 1e-4});
-  FemLinearStaticSolver lin(block(FemMaterialModel::linear), base_fixed(m));
+  const FemModel linear_model = block(FemMaterialModel::linear);  // the solver keeps a reference to it
+  FemLinearStaticSolver lin(linear_model, base_fixed(m));
   const FemStaticResult linear = lin.solve(grab, d, {});
   FemLocalRegionOptions o;
   o.radius_mm = 5;
@@ -245,6 +247,52 @@ TEST(FemLocalRegion, TheRegionFollowsTheTools) {
   EXPECT_EQ(names[4].first, "region_nodes");
   EXPECT_EQ(names[7].first, "interface_residual");
   EXPECT_GT(e.metrics().extra[7], 0);
+}
+
+// Each tool may have its own radius (ToolInput::local_region_mm, a scenario tool's local_region_mm): two
+// grabs lifted together, one with a 3 mm region and one with the engine's 6 mm; then the radii swapped.
+TEST(FemLocalRegion, EachToolCanHaveItsOwnRadius) {
+  FemModel m = block();
+  FemBoundaryConditions supports = base_fixed(m);
+  FemEngine e(std::move(m), std::move(supports), EmbeddedSurface(), {0, 0, 0}, local_options(6));
+  const Vec3 a{4, 4, 8}, b{12, 12, 8};
+  // Region nodes within 7 mm (rest) of each grab's centre.
+  const auto around = [&](const Vec3& c) {
+    int count = 0;
+    const std::vector<uint8_t>& flags = *e.local_region();
+    for (int32_t i = 0; i < e.model().node_count(); ++i) {
+      const double* x = &e.model().nodes[3 * static_cast<size_t>(i)];
+      const double d2 = (x[0] - c[0]) * (x[0] - c[0]) + (x[1] - c[1]) * (x[1] - c[1]) + (x[2] - c[2]) * (x[2] - c[2]);
+      count += d2 < 49 && flags[static_cast<size_t>(i)] != kFemOutsideRegion;
+    }
+    return count;
+  };
+  ToolInput ga = grab_at("tools[0] (grab)", a, {4, 4, 8.5}, 0), gb = grab_at("tools[1] (grab)", b, {12, 12, 8.5}, 0);
+  ga.local_region_mm = 3;  // b: 0, the engine's 6 mm
+  e.equilibrium({ga, gb}, 0.1);
+  const int small_a = around(a), large_b = around(b);
+  EXPECT_GT(small_a, 0);
+  EXPECT_GT(large_b, small_a + 10) << "a's 3 mm region is smaller than b's 6 mm one";
+  ga.local_region_mm = 6;
+  gb.local_region_mm = 3;
+  e.equilibrium({ga, gb}, 0.2);
+  // Swapped: a's region is now the larger (the Kuhn split is not symmetric under the swap, so the counts
+  // match the other grab's within a few nodes, not exactly).
+  EXPECT_GT(around(a), around(b) + 10);
+  EXPECT_NEAR(around(a), large_b, 5);
+  EXPECT_NEAR(around(b), small_a, 5);
+  // In a scenario: `local_region_mm` on a grab, clamp or force; refused without the solver's local region.
+  const std::string base =
+      "ctsurg_scenario: 1\nmodel: {kind: fem, tetmesh: t.h5, solver: static}\nmaterial: {preset: kidney}\ntime: {duration_s: 1}\n"
+      "output: {trajectory: o.h5}\ntools:\n  - grab: {radius_mm: 2, local_region_mm: 12, path: [{t: 0, position_mm: [0, 0, 0]}]}\n";
+  const Scenario ok = parse_scenario(base + "solver: {local_region: {radius_mm: 20}}\n", "f.yaml", "/b");
+  EXPECT_EQ(ok.tools[0].local_region_mm, 12);
+  try {
+    (void)parse_scenario(base, "f.yaml", "/b");
+    ADD_FAILURE() << "a tool's local_region_mm without the solver's local region was accepted";
+  } catch (const InputError& err) {
+    EXPECT_EQ(err.field(), "tools[0].grab.local_region_mm") << err.what();
+  }
 }
 
 // Without a local region the engine has no region metrics and no region.

@@ -2,6 +2,9 @@
 // viewers), through Assimp, chosen by the output's suffix:
 //   .glb (binary glTF 2), .gltf (glTF 2 JSON with a .bin beside it), .obj (Wavefront, no .mtl),
 //   .stl (binary STL), .ply (PLY)
+// and, written by ctsurg itself (ASCII), the VTK formats 3D Slicer opens as models:
+//   .vtk (legacy PolyData, title line "... SPACE=LPS"), .vtp (XML PolyData, FieldData SPACE = "LPS"),
+//   both with the normals as point data "Normals"
 // Coordinates are written as they are: LPS millimetres (glTF's "metres, +Y up" convention is not
 // applied; a viewer shows the patient in mm with superior along +Z). Normals go with the vertices
 // where the format has them (not STL, which stores face normals only).
@@ -24,7 +27,7 @@
 
 namespace ctsurg {
 
-// Assimp exporter id for `path`'s suffix ("glb2", "gltf2", "objnomtl", "stlb", "ply"), or "" when
+// Exporter id for `path`'s suffix ("glb2", "gltf2", "objnomtl", "stlb", "ply" for Assimp; "vtk", "vtp"), or "" when
 // the suffix is none of the export formats.
 std::string surface_export_format(const std::filesystem::path& path);
 

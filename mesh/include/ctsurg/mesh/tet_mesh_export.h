@@ -1,5 +1,6 @@
 // Export of a tetrahedral mesh to the formats FEM and visualisation programs open, chosen by suffix:
-//   .vtu   VTK XML UnstructuredGrid, ASCII (ParaView, VTK): tets with cell data "label"
+//   .vtu   VTK XML UnstructuredGrid, ASCII (ParaView, VTK, 3D Slicer): tets with cell data "labels" (the
+//          name SegmentMesher uses) and FieldData SPACE = "LPS" (the frame marker Slicer reads)
 //   .msh   Gmsh MSH 4.1 ASCII: one volume entity per label (physical group = label), tets only
 //   .mesh  Medit (INRIA) ASCII, Dimension 3: vertices, Triangles (boundary faces, ref = inside label),
 //          Tetrahedra (ref = label)

@@ -69,6 +69,8 @@ struct ToolInput {
   std::vector<std::string> stitch_fields;
   double stitch_target_mm = 0;                   // mm, >= 0
   double stitch_stiffness_ratio = 1;             // x the model's stiffest spring (> 0)
+  double local_region_mm = 0;  // grab, force on an FEM local region (fem_local_region.h): this tool's region
+                               // radius, mm; 0: the engine's
 };
 
 // What every engine is built with (an engine adds its own: fem_engine.h's solver).

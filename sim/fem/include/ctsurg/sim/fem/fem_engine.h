@@ -164,6 +164,7 @@ class FemEngine final : public SimulationEngine {
   std::unique_ptr<FemStaticSolver> static_solver_;
   std::unique_ptr<FemLocalRegionSolver> local_;
   std::vector<int32_t> seeds_;  // scratch: the tools' nodes the local region grows from
+  std::vector<double> seed_radii_;  // scratch: each seed's radius (its tool's local_region_mm or the engine's), mm
   FemBoundaryConditions bc_;
   double static_time_ = 0;
   int solves_ = 0, newton_ = 0, cg_ = 0;

@@ -18,6 +18,10 @@
 //   C_pp lambda = d - u_0,p (C_pp = the columns' rows at p: 3|G| x 3|G|, dense Cholesky, cached while
 //                           the grabbed node set stays the same);
 //   u = u_0 + C_:p lambda   (lambda are the grab's reaction forces).
+// A grab of more than max_grab_nodes nodes (a band of a vessel's wall, a large clamp) would need 3|G|
+// columns (|G| x |s| x 24 bytes, and |G| back-substitutions): instead K_ff (K_ss without p's rows and
+// columns) is factorised once per grabbed node set and u_f = K_ff^-1 (f_f - K_fp d) (the same
+// solution; an analysis and a factorisation like the construction's, kept while the set stays).
 // This is the exact solution of K_ff u_f = f_f - K_fp d on f = s \ p (the constrained system), so a
 // solve costs O(|s| |G|) multiply-adds instead of a sparse solve. Each solve then checks itself: one
 // product with K gives the true residual on f, ||K u - f|| / r_ref (r_ref = the residual of u = d on p,
@@ -43,12 +47,13 @@ struct FemLinearSolverOptions {
   double residual_tolerance = 1e-10;  // relative residual a solve must reach (see above)
   int max_refinements = 2;            // refinement steps before a solve reports converged = false
   int max_force_nodes = 64;           // loaded nodes up to which forces use cached columns
+  int max_grab_nodes = 64;            // grabbed nodes up to which grabs use columns (above: K_ff factorised)
   int threads = 0;                    // 0 = OpenMP's default (columns, products)
 };
 
 struct FemLinearSolverStats {
   double factor_seconds = 0;         // assembly, ordering and factorisation (construction)
-  double column_seconds = 0;         // all columns computed so far
+  double column_seconds = 0;         // all columns computed so far (and the large grabs' K_ff factorisations)
   int64_t columns = 0;               // unit-force responses computed so far (3 per node, less supports)
   int64_t factor_nonzeros = 0;       // non-zeros of L
   int free_components = 0;           // |s|

@@ -107,8 +107,11 @@ class FemLocalRegionSolver {
   // The result's report: the region's Newton iterations and CG iterations, converged = both solves
   // converged, seconds = the whole call; reactions at the held nodes (the region's where it holds them,
   // else the global solve's). Throws as FemLinearStaticSolver::solve and FemStaticSolver::solve.
+  // seed_radii (optional, #seeds mm, > 0): each seed's own radius (a tool's region: a node is in the
+  // region when it is within the radius of some seed); nullptr: options.radius_mm for every seed.
   FemStaticResult solve(const std::vector<int32_t>& prescribed_nodes, const std::vector<double>& prescribed_displacements,
-                        const FemLoads& loads, const std::vector<int32_t>& seeds, const std::vector<double>* initial = nullptr);
+                        const FemLoads& loads, const std::vector<int32_t>& seeds, const std::vector<double>* initial = nullptr,
+                        const std::vector<double>* seed_radii = nullptr);
 
   const FemLocalRegionReport& report() const;                 // of the last solve
   const std::vector<uint8_t>& node_region() const;            // #N flags of the last solve (kFem*Region*)

@@ -49,6 +49,8 @@ class FemToolHolds {
   const std::vector<double>& nodal_forces() const { return nodal_forces_; }
   // Whether tool `tool` holds nodes (a grab its capture, a force the nodes it loads).
   bool engaged(size_t tool) const;
+  // The nodes tool `tool` holds (a grab's capture, a force's loaded nodes; increasing), empty when none.
+  const std::vector<int32_t>& held_nodes(size_t tool) const;
   // After a cut split nodes (fem_cutting.h): node N + k copies parents[k] (N: the count before); a copy
   // of a fixed node is fixed. What the tools hold stays as it is.
   void nodes_added(const std::vector<int32_t>& parents);

@@ -87,6 +87,8 @@ struct ToolAction {
   std::optional<SutureLine> along;
   double stitch_target_mm = 0;
   double stitch_stiffness_ratio = 1;
+  // grab, clamp, force with solver.local_region: this tool's region radius (mm, > 0); 0: the solver's.
+  double local_region_mm = 0;
 };
 
 // A picture the pipeline makes from the trajectory with ctsurg-render (scripts/Makefile); ctsurg-sim
