@@ -81,6 +81,8 @@ class Tokens {
     while (at_ < text_.size() && text_[at_] != '\n') ++at_;
   }
   bool comments = false;  // '#' starts a comment (Medit)
+  // Bytes of text not yet read.
+  std::size_t remaining() const { return text_.size() - std::min(at_, text_.size()); }
 
  private:
   void skip() {
@@ -99,9 +101,15 @@ class Tokens {
   std::size_t at_ = 0;
 };
 
+// A count read from the file. Each counted item takes at least one token and a separator (2 bytes)
+// of what is left, so a count the rest of the file cannot hold is refused before anything is reserved
+// for it (a fuzzed Medit file declared 935,854,226 vertices in 637 bytes: 22 GB reserved).
 int64_t count_of(Tokens& t, const std::string& what, const std::string& file, int64_t max = int64_t{1} << 31) {
   const int64_t n = t.integer(what);
   if (n < 0 || n >= max) throw InputError(file, what, fmt::format("count {} out of range", n));
+  if (static_cast<uint64_t>(n) > t.remaining() / 2) {
+    throw InputError(file, what, fmt::format("count {} is more than the {} bytes left in the file can hold", n, t.remaining()));
+  }
   return n;
 }
 

@@ -136,6 +136,10 @@ TEST(TetMeshImport, BadFilesAreRefusedNamingFileAndElement) {
   write_text(dir / "dup.mesh", head + "Tetrahedra\n2\n1 2 3 4 1\n2 1 3 4 2\nEnd\n");
   EXPECT_NE(refusal(dir / "dup.mesh").find("dup.mesh: tet 2: the same four nodes as tet 1"), std::string::npos)
       << refusal(dir / "dup.mesh");
+  // tests/fuzz_regressions/README.md: a Medit file declaring 935,854,226 vertices in 637 bytes had
+  // 22 GB reserved for them; a count the rest of the file cannot hold is refused first.
+  fs::copy_file(ctsurg::test::source_dir() / "tests" / "fuzz_regressions" / "fuzz_medit" / "oom-0bd670f2", dir / "oom.mesh");
+  EXPECT_NE(refusal(dir / "oom.mesh").find("count 935854226 is more than the"), std::string::npos) << refusal(dir / "oom.mesh");
   write_text(dir / "label.mesh", head + "Tetrahedra\n1\n1 2 3 4 0\nEnd\n");
   EXPECT_NE(refusal(dir / "label.mesh").find("label 0 is not in [1, 65535]"), std::string::npos);
   write_text(dir / "short.mesh", head + "Tetrahedra\n2\n1 2 3 4 1\n");
