@@ -19,14 +19,33 @@ packages=(
   python3-vtk9 python3-h5py time tetgen
   # the pipeline's scale-out path (scripts/Snakefile, docs/pipeline.md) and its test
   snakemake
+  # video: ctsurg-render --animation .gif/.mp4 (H.264) and ffprobe in its tests
+  ffmpeg
+  # the Khronos glTF validator the tests run on every .glb/.gltf (npm package, tests/support/gltf)
+  nodejs npm
 )
+
+# npm ci in tests/support/gltf (gltf-validator, pinned by its package-lock.json), only when
+# node_modules is missing or was installed from another lock: reruns stay offline.
+install_gltf_validator() {
+  local dir lock stamp
+  dir="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)/tests/support/gltf"
+  lock="$(sha256sum "$dir/package-lock.json" | cut -d' ' -f1)"
+  stamp="$dir/node_modules/.ctsurg-lock.sha256"
+  [[ -f "$stamp" && "$(cat "$stamp")" == "$lock" ]] && return 0
+  echo "install-deps: npm ci in $dir"
+  (cd "$dir" && npm ci --no-audit --no-fund --loglevel=error >/dev/null)
+  echo "$lock" >"$stamp"
+}
 
 missing=()
 for p in "${packages[@]}"; do
+  [[ $p == npm ]] && command -v npm >/dev/null && continue  # NodeSource's nodejs bundles npm
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
 done
 if ((${#missing[@]} == 0)); then
   echo "install-deps: all ${#packages[@]} packages present"
+  install_gltf_validator
   exit 0
 fi
 SUDO=""
@@ -35,4 +54,5 @@ echo "install-deps: installing ${#missing[@]} packages: ${missing[*]}"
 export DEBIAN_FRONTEND=noninteractive
 $SUDO apt-get update -qq
 $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+install_gltf_validator
 echo "install-deps: done"

@@ -3,6 +3,7 @@
 #include "ctsurg/core/checked_write.h"
 #include "ctsurg/core/error.h"
 #include "ctsurg/core/library_messages.h"
+#include "ctsurg/mesh/gltf_frame.h"
 #include "ctsurg/mesh/normal_map_png.h"
 
 #include <assimp/Exporter.hpp>
@@ -85,16 +86,61 @@ class MemoryFiles final : public Assimp::IOSystem {
 
 void append_u32(std::string& s, uint32_t v) { s.append(reinterpret_cast<const char*>(&v), 4); }
 
-// Assimp 5.2's glTF 2 exporter drops tangents, so they are added after it: #V x 4 float32
-// tangents are appended to the binary buffer (the GLB's BIN chunk, or the .bin beside a .gltf) as a
-// new buffer view and a VEC4 accessor, and the primitive's attributes get TANGENT (glTF 2.0,
-// section 3.7.2.1: xyz unit tangent, w = +-1 handedness; the same convention as ctsurg's). The
+// A mesh's vertex data in the glTF frame (gltf_frame.h): positions in metres, normals and tangent
+// xyz rotated, tangent w kept; #V x 3, #V x 3 and #V x 4 (empty without tangents) float32.
+struct GltfVertices {
+  std::vector<float> positions, normals, tangents;
+};
+
+GltfVertices to_gltf_frame(const SurfaceMesh& mesh) {
+  const std::size_t nv = static_cast<std::size_t>(mesh.vertex_count());
+  GltfVertices g;
+  g.positions.resize(3 * nv);
+  g.normals.resize(3 * nv);
+  for (std::size_t v = 0; v < nv; ++v) {
+    const auto p = lps_mm_to_gltf_position(&mesh.vertices[3 * v]);
+    const auto n = lps_to_gltf_direction(&mesh.normals[3 * v]);
+    std::copy(p.begin(), p.end(), &g.positions[3 * v]);
+    std::copy(n.begin(), n.end(), &g.normals[3 * v]);
+  }
+  if (!mesh.tangents.empty()) {
+    g.tangents.resize(4 * nv);
+    for (std::size_t v = 0; v < nv; ++v) {
+      const auto t = lps_to_gltf_direction(&mesh.tangents[4 * v]);
+      std::copy(t.begin(), t.end(), &g.tangents[4 * v]);
+      g.tangents[4 * v + 3] = mesh.tangents[4 * v + 3];  // a proper rotation keeps the handedness
+    }
+  }
+  return g;
+}
+
+// Removes every "extensions" object and the extensionsUsed / extensionsRequired lists. Assimp 5.2
+// declares KHR_materials_volume and FB_ngon_encoding in every file, though nothing of theirs is
+// needed: ctsurg's material is core glTF 2.0 (pbrMetallicRoughness + normalTexture), its primitives
+// plain triangles. An undeclared or unneeded extension makes strict loaders warn or refuse.
+void strip_gltf_extensions(nlohmann::json& j) {
+  if (j.is_object()) {
+    j.erase("extensions");
+    j.erase("extensionsUsed");
+    j.erase("extensionsRequired");
+    for (auto& [key, value] : j.items()) strip_gltf_extensions(value);
+  } else if (j.is_array()) {
+    for (auto& value : j) strip_gltf_extensions(value);
+  }
+}
+
+// Post-processes a glTF export by Assimp (files.front(): the .glb, or the .gltf with its .bin
+// beside it): drops the extensions (strip_gltf_extensions), records the frame in asset.extras, and
+// adds the tangents. Assimp 5.2's glTF 2 exporter drops tangents, so they are added after it: #V x 4
+// float32 tangents are appended to the binary buffer (the GLB's BIN chunk, or the .bin beside a
+// .gltf) as a new buffer view and a VEC4 accessor, and the primitive's attributes get TANGENT (glTF
+// 2.0, section 3.7.2.1: xyz unit tangent, w = +-1 handedness; the same convention as ctsurg's). The
 // exporter joins identical vertices (its enforced aiProcess_JoinIdenticalVertices), so each
 // exported vertex is matched to the mesh vertex with the same position and texture coordinates
 // (bit for bit: the joined vertex keeps the data of its first copy; v is compared after the same
 // two float flips, ours and the exporter's, that produced the written value).
-void add_gltf_tangents(std::vector<std::pair<std::string, std::string>>& files, bool binary, const SurfaceMesh& mesh,
-                       const std::string& named) {
+void finish_gltf(std::vector<std::pair<std::string, std::string>>& files, bool binary, const SurfaceMesh& mesh,
+                 const GltfVertices& g, const std::string& named) {
   std::string file = files.front().second, bin;
   nlohmann::json j;
   std::string* bin_file = nullptr;
@@ -115,50 +161,55 @@ void add_gltf_tangents(std::vector<std::pair<std::string, std::string>>& files, 
     if (!bin_file) throw RuntimeError(named + ": the glTF exporter wrote no '" + uri + "'");
     bin = *bin_file;
   }
-  auto& primitive = j.at("meshes").at(0).at("primitives").at(0);
-  // The floats of a tightly packed float accessor.
-  const auto floats = [&](const char* attribute, std::size_t width) {
-    const auto& a = j.at("accessors").at(primitive.at("attributes").at(attribute).get<std::size_t>());
-    const auto& view = j.at("bufferViews").at(a.at("bufferView").get<std::size_t>());
-    const std::size_t count = a.at("count").get<std::size_t>();
-    const std::size_t offset = view.value("byteOffset", std::size_t{0}) + a.value("byteOffset", std::size_t{0});
-    if (view.value("byteStride", 4 * width) != 4 * width || offset + 4 * width * count > bin.size()) {
-      throw RuntimeError(named + ": unexpected glTF accessor layout");
+  strip_gltf_extensions(j);
+  j["asset"]["extras"] = {{"ctsurg_frame", "metres; glTF +X = patient left, +Y = superior, +Z = anterior "
+                                           "(from LPS millimetres: x, z, -y times 0.001)"}};
+  if (!g.tangents.empty() && !mesh.uvs.empty()) {
+    auto& primitive = j.at("meshes").at(0).at("primitives").at(0);
+    // The floats of a tightly packed float accessor.
+    const auto floats = [&](const char* attribute, std::size_t width) {
+      const auto& a = j.at("accessors").at(primitive.at("attributes").at(attribute).get<std::size_t>());
+      const auto& view = j.at("bufferViews").at(a.at("bufferView").get<std::size_t>());
+      const std::size_t count = a.at("count").get<std::size_t>();
+      const std::size_t offset = view.value("byteOffset", std::size_t{0}) + a.value("byteOffset", std::size_t{0});
+      if (view.value("byteStride", 4 * width) != 4 * width || offset + 4 * width * count > bin.size()) {
+        throw RuntimeError(named + ": unexpected glTF accessor layout");
+      }
+      std::vector<float> out(width * count);
+      std::memcpy(out.data(), bin.data() + offset, out.size() * sizeof(float));
+      return out;
+    };
+    const std::vector<float> pos = floats("POSITION", 3), uv = floats("TEXCOORD_0", 2);
+    const std::size_t n = pos.size() / 3;
+    using Key = std::array<uint32_t, 5>;
+    const auto key_of = [](const float* p, float u, float v) {
+      Key k;
+      std::memcpy(k.data(), p, 12);
+      std::memcpy(&k[3], &u, 4);
+      std::memcpy(&k[4], &v, 4);
+      return k;
+    };
+    std::map<Key, std::size_t> index;
+    for (std::size_t v = 0; v < static_cast<std::size_t>(mesh.vertex_count()); ++v) {
+      const float flipped = 1.0f - mesh.uvs[2 * v + 1];  // ours (export_surface_mesh)
+      index.emplace(key_of(&g.positions[3 * v], mesh.uvs[2 * v], 1.0f - flipped), v);  // the exporter's
     }
-    std::vector<float> out(width * count);
-    std::memcpy(out.data(), bin.data() + offset, out.size() * sizeof(float));
-    return out;
-  };
-  const std::vector<float> pos = floats("POSITION", 3), uv = floats("TEXCOORD_0", 2);
-  const std::size_t n = pos.size() / 3;
-  using Key = std::array<uint32_t, 5>;
-  const auto key_of = [](const float* p, float u, float v) {
-    Key k;
-    std::memcpy(k.data(), p, 12);
-    std::memcpy(&k[3], &u, 4);
-    std::memcpy(&k[4], &v, 4);
-    return k;
-  };
-  std::map<Key, std::size_t> index;
-  for (std::size_t v = 0; v < static_cast<std::size_t>(mesh.vertex_count()); ++v) {
-    const float flipped = 1.0f - mesh.uvs[2 * v + 1];  // ours (export_surface_mesh)
-    index.emplace(key_of(&mesh.vertices[3 * v], mesh.uvs[2 * v], 1.0f - flipped), v);  // the exporter's
+    std::vector<float> tangents(4 * n);
+    for (std::size_t v = 0; v < n; ++v) {
+      const auto it = index.find(key_of(&pos[3 * v], uv[2 * v], uv[2 * v + 1]));
+      if (it == index.end()) throw RuntimeError(named + ": an exported vertex matches no mesh vertex; cannot add tangents");
+      std::copy_n(&g.tangents[4 * it->second], 4, &tangents[4 * v]);
+    }
+    while (bin.size() % 4 != 0) bin.push_back('\0');
+    const std::size_t offset = bin.size();
+    bin.append(reinterpret_cast<const char*>(tangents.data()), tangents.size() * sizeof(float));
+    j["bufferViews"].push_back(
+        {{"buffer", 0}, {"byteOffset", offset}, {"byteLength", tangents.size() * sizeof(float)}, {"target", 34962}});
+    j["accessors"].push_back({{"bufferView", j["bufferViews"].size() - 1}, {"byteOffset", 0}, {"componentType", 5126},
+                              {"count", n}, {"type", "VEC4"}});
+    primitive["attributes"]["TANGENT"] = j["accessors"].size() - 1;
+    j["buffers"][0]["byteLength"] = bin.size();
   }
-  std::vector<float> tangents(4 * n);
-  for (std::size_t v = 0; v < n; ++v) {
-    const auto it = index.find(key_of(&pos[3 * v], uv[2 * v], uv[2 * v + 1]));
-    if (it == index.end()) throw RuntimeError(named + ": an exported vertex matches no mesh vertex; cannot add tangents");
-    std::copy_n(&mesh.tangents[4 * it->second], 4, &tangents[4 * v]);
-  }
-  while (bin.size() % 4 != 0) bin.push_back('\0');
-  const std::size_t offset = bin.size();
-  bin.append(reinterpret_cast<const char*>(tangents.data()), tangents.size() * sizeof(float));
-  j["bufferViews"].push_back(
-      {{"buffer", 0}, {"byteOffset", offset}, {"byteLength", tangents.size() * sizeof(float)}, {"target", 34962}});
-  j["accessors"].push_back({{"bufferView", j["bufferViews"].size() - 1}, {"byteOffset", 0}, {"componentType", 5126},
-                            {"count", n}, {"type", "VEC4"}});
-  primitive["attributes"]["TANGENT"] = j["accessors"].size() - 1;
-  j["buffers"][0]["byteLength"] = bin.size();
   std::string text = j.dump();
   if (!binary) {
     *bin_file = bin;
@@ -287,9 +338,16 @@ std::vector<std::pair<std::string, std::string>> export_surface_mesh(const std::
   m.mNumVertices = nv;
   m.mVertices = new aiVector3D[nv];
   m.mNormals = new aiVector3D[nv];
+  // glTF's frame and units are baked into the vertices (gltf_frame.h); OBJ, STL and PLY have no
+  // convention of their own and keep LPS millimetres, like the .h5 they come from.
+  const bool gltf = format == "glb2" || format == "gltf2";
+  const GltfVertices g = gltf ? to_gltf_frame(mesh) : GltfVertices{};
+  const std::vector<float>& positions = gltf ? g.positions : mesh.vertices;
+  const std::vector<float>& normals = gltf ? g.normals : mesh.normals;
+  const std::vector<float>& tangents = gltf ? g.tangents : mesh.tangents;
   for (unsigned v = 0; v < nv; ++v) {
-    m.mVertices[v] = aiVector3D(mesh.vertices[3 * v], mesh.vertices[3 * v + 1], mesh.vertices[3 * v + 2]);
-    m.mNormals[v] = aiVector3D(mesh.normals[3 * v], mesh.normals[3 * v + 1], mesh.normals[3 * v + 2]);
+    m.mVertices[v] = aiVector3D(positions[3 * v], positions[3 * v + 1], positions[3 * v + 2]);
+    m.mNormals[v] = aiVector3D(normals[3 * v], normals[3 * v + 1], normals[3 * v + 2]);
   }
   if (!mesh.uvs.empty()) {
     // Assimp keeps OpenGL's texture origin (v up, from the bottom row); ctsurg's uvs follow glTF
@@ -302,9 +360,9 @@ std::vector<std::pair<std::string, std::string>> export_surface_mesh(const std::
     m.mTangents = new aiVector3D[nv];
     m.mBitangents = new aiVector3D[nv];
     for (unsigned v = 0; v < nv; ++v) {
-      const aiVector3D t(mesh.tangents[4 * v], mesh.tangents[4 * v + 1], mesh.tangents[4 * v + 2]);
+      const aiVector3D t(tangents[4 * v], tangents[4 * v + 1], tangents[4 * v + 2]);
       m.mTangents[v] = t;
-      m.mBitangents[v] = (m.mNormals[v] ^ t) * mesh.tangents[4 * v + 3];  // w * normal x tangent
+      m.mBitangents[v] = (m.mNormals[v] ^ t) * tangents[4 * v + 3];  // w * normal x tangent
     }
   }
   if (!mesh.normal_map.empty() && normal_map_uri.empty()) {
@@ -353,9 +411,7 @@ std::vector<std::pair<std::string, std::string>> export_surface_mesh(const std::
     throw RuntimeError(output.string() + ": the exporter wrote no file of that name");
   }
   for (auto& [name, bytes] : out) name = std::filesystem::path(name).filename().string();
-  if (!mesh.tangents.empty() && !mesh.uvs.empty() && (format == "glb2" || format == "gltf2")) {
-    add_gltf_tangents(out, format == "glb2", mesh, output.string());
-  }
+  if (gltf) finish_gltf(out, format == "glb2", mesh, g, output.string());
   return out;
 }
 

@@ -216,18 +216,18 @@ int main(int argc, char** argv) {
 
         // Render; each picture goes to a temporary file, all (and the animation) are committed together.
         ctsurg::OutputUnit outputs;
-        std::vector<ctsurg::RgbImage> animation_frames;
+        std::vector<std::vector<uint8_t>> animation_frames;  // PNG bytes, as written
         std::vector<fs::path> written;
         ctsurg::render_pictures(model, request, [&](ctsurg::Picture&& picture) {
-          const std::vector<uint8_t> png = ctsurg::encode_png(picture.image);
+          std::vector<uint8_t> png = ctsurg::encode_png(picture.image);
           ctsurg::AtomicOutput& out = outputs.add(output_name(output, picture.tag));
           ctsurg::write_file_checked(out.temp_path(),
                                      std::string_view(reinterpret_cast<const char*>(png.data()), png.size()),
                                      out.path().string());
           written.push_back(out.path());
-          if (!animation.empty()) animation_frames.push_back(std::move(picture.image));
+          if (!animation.empty()) animation_frames.push_back(std::move(png));
         });
-        if (!animation.empty()) ctsurg::write_animation(animation, animation_frames, fps, &outputs);
+        if (!animation.empty()) ctsurg::write_animation_png(animation, animation_frames, fps, &outputs);
         outputs.commit();
         spdlog::info("wrote {} picture{} ({}{}) in {:.2f} s", written.size(), written.size() == 1 ? "" : "s",
                      written.size() == 1 ? written.front().string() : output,

@@ -1,6 +1,7 @@
 // ctsurg-normalmap as a user runs it: a ridged ball as an occupancy grid (2 mm cells, tissue mask at
 // 1 mm), its surface from ctsurg-surface, then the normal map tool's .h5 / .png / .glb / .gltf
-// outputs, determinism and bad-input handling (exit 2, a message naming the problem, no file left).
+// outputs (glTF: valid by the Khronos validator, in glTF's frame with rotated normals and tangents),
+// determinism and bad-input handling (exit 2, a message naming the problem, no file left).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -14,6 +15,7 @@
 #include "ctsurg/core/provenance.h"
 #include "ctsurg/core/surface_mesh_file.h"
 #include "ctsurg/mesh/normal_map_png.h"
+#include "gltf_checks.h"
 #include "test_support.h"
 
 namespace fs = std::filesystem;
@@ -86,6 +88,41 @@ nlohmann::json expect_normal_textured(const nlohmann::json& j) {
   return j["images"][tex["source"].get<std::size_t>()];
 }
 
+// The .glb/.gltf at `path` passes the Khronos validator, declares no extension, and holds the
+// vertices of `m` (the .h5 the same run wrote) in glTF's frame (docs/formats.md): each exported
+// vertex is an .h5 vertex with the same uv at (x, z, -y) / 1000 m, its NORMAL and TANGENT xyz rotated
+// the same way and TANGENT w (handedness) unchanged.
+void expect_gltf_frame(const fs::path& path, const ctsurg::SurfaceMesh& m) {
+  EXPECT_TRUE(ctsurg::test::gltf_validates({path}));
+  const auto gltf = ctsurg::test::read_gltf(path);
+  EXPECT_FALSE(gltf.json.contains("extensionsUsed")) << path << ": " << gltf.json["extensionsUsed"].dump();
+  EXPECT_EQ(gltf.json.dump().find("\"extensions\""), std::string::npos) << path;
+  const std::vector<float> p = gltf.floats(gltf.attribute("POSITION")), n = gltf.floats(gltf.attribute("NORMAL")),
+                           t = gltf.floats(gltf.attribute("TANGENT")), uv = gltf.floats(gltf.attribute("TEXCOORD_0"));
+  ASSERT_EQ(p.size() / 3, t.size() / 4) << path;
+  ASSERT_EQ(p.size() / 3, uv.size() / 2) << path;
+  const auto rotate = [](const float* a) { return Eigen::Vector3d(a[0], a[2], -a[1]); };
+  int unmatched = 0, wrong = 0;
+  for (std::size_t v = 0; v < p.size() / 3; ++v) {
+    const Eigen::Vector3d pv(p[3 * v], p[3 * v + 1], p[3 * v + 2]);
+    std::size_t u = 0;
+    for (; u < static_cast<std::size_t>(m.vertex_count()); ++u) {
+      if ((rotate(&m.vertices[3 * u]) / 1000.0 - pv).norm() < 1e-7 && std::abs(m.uvs[2 * u] - uv[2 * v]) < 1e-6f &&
+          std::abs(m.uvs[2 * u + 1] - uv[2 * v + 1]) < 1e-6f)
+        break;
+    }
+    if (u == static_cast<std::size_t>(m.vertex_count())) {
+      ++unmatched;
+      continue;
+    }
+    const Eigen::Vector3d nv(n[3 * v], n[3 * v + 1], n[3 * v + 2]), tv(t[4 * v], t[4 * v + 1], t[4 * v + 2]);
+    wrong += (nv - rotate(&m.normals[3 * u])).norm() > 1e-6 || (tv - rotate(&m.tangents[4 * u])).norm() > 1e-6 ||
+             t[4 * v + 3] != m.tangents[4 * u + 3] || std::abs(nv.dot(tv)) > 1e-3;
+  }
+  EXPECT_EQ(unmatched, 0) << path;
+  EXPECT_EQ(wrong, 0) << path;
+}
+
 struct Outputs {
   fs::path grid, surface;
 };
@@ -132,6 +169,7 @@ TEST(CtsurgNormalmap, WritesSurfacePngAndGlbWithTheNormalTexture) {
   EXPECT_TRUE(img.contains("bufferView")) << img.dump();
   // The PNG is embedded byte for byte.
   EXPECT_NE(glb.find(png.substr(0, 4096)), std::string::npos);
+  expect_gltf_frame(dir / "nm.glb", m);
   for (const auto& f : ctsurg::test::files_in(dir.path()))
     EXPECT_EQ(f.filename().string().rfind(".tmp-", 0), std::string::npos) << f;
 }
@@ -150,7 +188,9 @@ TEST(CtsurgNormalmap, GltfWritesBinBesideIt16Bit) {
   const auto map = ctsurg::decode_normal_map_png(std::vector<uint8_t>(png.begin(), png.end()), "nm_normal_map.png");
   EXPECT_EQ(map.bits, 16);
   EXPECT_EQ(map.width, 128);
-  EXPECT_EQ(ctsurg::read_surface_mesh_file(dir / "nm.h5").normal_map.bits, 16);
+  const auto m = ctsurg::read_surface_mesh_file(dir / "nm.h5");
+  EXPECT_EQ(m.normal_map.bits, 16);
+  expect_gltf_frame(dir / "nm.gltf", m);
   for (const auto& f : ctsurg::test::files_in(dir.path()))
     EXPECT_EQ(f.filename().string().rfind(".tmp-", 0), std::string::npos) << f;
 }

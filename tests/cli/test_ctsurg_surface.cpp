@@ -1,10 +1,12 @@
 // ctsurg-surface as a user runs it: an occupancy grid of a ball written with
-// write_occupancy_grid_file, then the tool's .h5 / .glb / .stl / .obj outputs, determinism and
-// bad-input handling (exit 2, a message naming the problem, no file left behind).
+// write_occupancy_grid_file, then the tool's .h5 / .glb / .stl / .obj outputs (glTF: valid by the
+// Khronos validator, metres, +Y superior, +Z anterior, faces outward), determinism and bad-input
+// handling (exit 2, a message naming the problem, no file left behind).
 #include "ctsurg/core/hu_volume_file.h"
 #include "ctsurg/core/occupancy_grid_file.h"
 #include "ctsurg/core/provenance.h"
 #include "ctsurg/core/surface_mesh_file.h"
+#include "gltf_checks.h"
 #include "surface_checks.h"
 #include "test_support.h"
 
@@ -13,6 +15,8 @@
 #include <spdlog/fmt/fmt.h>
 
 #include <Eigen/Geometry>
+
+#include <algorithm>
 
 #include <cmath>
 #include <cstring>
@@ -117,12 +121,96 @@ TEST(CtsurgSurface, ExportsGlbStlObjPly) {
   EXPECT_TRUE(fs::exists(dir / "s.bin"));
   EXPECT_NE(read_bytes(dir / "s.gltf").find("\"s.bin\""), std::string::npos);
   EXPECT_FALSE(fs::exists(dir / "s.mtl"));
+  EXPECT_TRUE(ctsurg::test::gltf_validates({dir / "s.glb", dir / "s.gltf"}));
+  for (const std::string name : {"s.glb", "s.gltf"}) {
+    const auto j = ctsurg::test::read_gltf(dir / name).json;
+    EXPECT_FALSE(j.contains("extensionsUsed")) << name << ": " << j.dump();
+    EXPECT_FALSE(j.contains("extensionsRequired")) << name;
+    EXPECT_EQ(j.dump().find("\"extensions\""), std::string::npos) << name << ": " << j.dump();
+  }
   const std::string stl = read_bytes(dir / "s.stl");
   ASSERT_GT(stl.size(), 84u);
   uint32_t facets = 0;
   std::memcpy(&facets, stl.data() + 80, 4);
   EXPECT_EQ(stl.size(), 84u + 50u * facets);
   for (const auto& f : ctsurg::test::files_in(dir.path())) EXPECT_EQ(f.filename().string().rfind(".tmp-", 0), std::string::npos) << f;
+}
+
+// glTF is metres with +X the patient's left, +Y superior, +Z anterior (docs/formats.md): a box of
+// HU 300 in air at a known LPS place, of a different size along each axis (20, 10, 5 voxels of 1 mm),
+// lands with POSITION min/max on the rotated, scaled box. The iso -350 is halfway between the two
+// HU values, so each face is half a voxel outside the centres of the box's outer voxels.
+TEST(CtsurgSurface, GltfIsInMetresWithSuperiorUpAndAnteriorToTheFront) {
+  TempDir dir;
+  ctsurg::HuVolume v;
+  ctsurg::ImageGeometry g;
+  g.dims = {30, 20, 14};
+  g.origin = Eigen::Vector3d(-40.0, 10.0, 200.0);
+  v.hu = ctsurg::Volume<float>(g, -1000.0f);
+  for (int64_t k = 4; k < 9; ++k)
+    for (int64_t j = 4; j < 14; ++j)
+      for (int64_t i = 4; i < 24; ++i) v.hu(i, j, k) = 300.0f;
+  ctsurg::write_hu_volume_file(dir / "ct.h5", v, test_provenance());
+  // LPS extent, mm: x [-36.5, -16.5] (left), y [13.5, 23.5] (posterior), z [203.5, 208.5] (superior).
+  const double lo_lps[3] = {-36.5, 13.5, 203.5}, hi_lps[3] = {-16.5, 23.5, 208.5};
+  // glTF, m: X = x, Y = z, Z = -y.
+  const double lo[3] = {lo_lps[0] / 1000, lo_lps[2] / 1000, -hi_lps[1] / 1000};
+  const double hi[3] = {hi_lps[0] / 1000, hi_lps[2] / 1000, -lo_lps[1] / 1000};
+  for (const std::string name : {"box.glb", "box.gltf"}) {
+    const auto r = run_tool("ctsurg-surface", {(dir / "ct.h5").string(), (dir / name).string(), "--iso", "-350"});
+    ASSERT_EQ(r.exit_code, 0) << name << ": " << r.output;
+    const auto gltf = ctsurg::test::read_gltf(dir / name);
+    const auto& position = gltf.json.at("accessors").at(gltf.attribute("POSITION"));
+    const std::vector<float> p = gltf.floats(gltf.attribute("POSITION"));
+    ASSERT_FALSE(p.empty()) << name;
+    for (int a = 0; a < 3; ++a) {
+      EXPECT_NEAR(position.at("min").at(a).get<double>(), lo[a], 1e-6) << name << " axis " << a;
+      EXPECT_NEAR(position.at("max").at(a).get<double>(), hi[a], 1e-6) << name << " axis " << a;
+      float mn = p[a], mx = p[a];
+      for (std::size_t i = a; i < p.size(); i += 3) mn = std::min(mn, p[i]), mx = std::max(mx, p[i]);
+      EXPECT_NEAR(mn, lo[a], 1e-6) << name << " axis " << a;
+      EXPECT_NEAR(mx, hi[a], 1e-6) << name << " axis " << a;
+    }
+  }
+  EXPECT_TRUE(ctsurg::test::gltf_validates({dir / "box.glb", dir / "box.gltf"}));
+}
+
+// After the rotation to glTF's axes the ball still faces outward: every vertex normal and every
+// triangle's counter-clockwise face normal point away from the ball's centre (rotated and scaled the
+// same way), and the normals are unit.
+TEST(CtsurgSurface, GltfNormalsAndWindingFaceOutward) {
+  TempDir dir;
+  const fs::path grid = write_grid(dir, "g.h5");
+  for (const std::string name : {"s.glb", "s.gltf"}) {
+    ASSERT_EQ(run_tool("ctsurg-surface", {grid.string(), (dir / name).string()}).exit_code, 0) << name;
+  }
+  // write_grid's centre, LPS mm: origin + 2 mm * (8.4, 8.1, 7.6); in glTF metres (x, z, -y) / 1000.
+  const Eigen::Vector3d lps(-17.0 + 16.8, -16.0 + 16.2, 85.0 + 15.2);
+  const Eigen::Vector3d centre = Eigen::Vector3d(lps.x(), lps.z(), -lps.y()) / 1000.0;
+  for (const std::string name : {"s.glb", "s.gltf"}) {
+    const auto gltf = ctsurg::test::read_gltf(dir / name);
+    const std::vector<float> p = gltf.floats(gltf.attribute("POSITION")), n = gltf.floats(gltf.attribute("NORMAL"));
+    const std::vector<uint32_t> tri =
+        gltf.indices(gltf.json.at("meshes").at(0).at("primitives").at(0).at("indices").get<std::size_t>());
+    ASSERT_EQ(p.size(), n.size()) << name;
+    ASSERT_GT(tri.size(), 1500u) << name;
+    const auto at = [](const std::vector<float>& a, std::size_t v) {
+      return Eigen::Vector3d(a[3 * v], a[3 * v + 1], a[3 * v + 2]);
+    };
+    int inward_normals = 0, inward_faces = 0;
+    for (std::size_t v = 0; v < p.size() / 3; ++v) {
+      EXPECT_NEAR(at(n, v).norm(), 1.0, 1e-4) << name << " vertex " << v;
+      // Within 1 mm of the 12 mm sphere: metres.
+      EXPECT_NEAR((at(p, v) - centre).norm(), kRadiusMm / 1000.0, 1e-3) << name << " vertex " << v;
+      inward_normals += at(n, v).dot(at(p, v) - centre) <= 0.0;
+    }
+    for (std::size_t f = 0; f + 2 < tri.size(); f += 3) {
+      const Eigen::Vector3d a = at(p, tri[f]), b = at(p, tri[f + 1]), c = at(p, tri[f + 2]);
+      inward_faces += (b - a).cross(c - a).dot((a + b + c) / 3.0 - centre) <= 0.0;
+    }
+    EXPECT_EQ(inward_normals, 0) << name;
+    EXPECT_EQ(inward_faces, 0) << name;
+  }
 }
 
 // .vtk and .vtp for 3D Slicer: the SPACE=LPS marker, normals as point data, read back by VTK when

@@ -1,7 +1,11 @@
 // ctsurg-render as a user runs it: a surface and a trajectory written by the test, PNG outputs,
 // sequences with {}, byte-identical reruns, and bad input (exit 2, a message naming the problem,
-// nothing written).
+// nothing written), and --animation as GIF and MP4 checked with ffprobe.
 #include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <fstream>
+#include <sstream>
 
 #include "ctsurg/core/file_hash.h"
 #include "ctsurg/core/surface_mesh_file.h"
@@ -166,4 +170,141 @@ TEST(CtsurgRender, ATrajectoryWithoutASurfaceFileIsDrawnByItsOwnTriangles) {
   const auto neither = run_tool("ctsurg-render", {"-o", (in.dir / "y.png").string()});
   EXPECT_EQ(neither.exit_code, 2) << neither.output;
   EXPECT_NE(neither.output.find("--surface"), std::string::npos) << neither.output;
+}
+
+// Issue 21: --animation as a user runs it, checked with ffprobe (installed with ffmpeg by
+// scripts/install-deps.sh; CI has it, so its absence is a failure, not a skip).
+namespace {
+
+bool ffmpeg_installed() { return ctsurg::test::run_shell("command -v ffmpeg && command -v ffprobe").exit_code == 0; }
+#define CTSURG_REQUIRE_FFMPEG() \
+  ASSERT_TRUE(ffmpeg_installed()) << "ffmpeg and ffprobe are not installed: run scripts/install-deps.sh"
+
+struct Probe {
+  std::string codec, pix_fmt;
+  int width = 0, height = 0;
+  long frames = -1;
+  std::string frame_rate, raw;
+};
+
+// ffprobe's view of the first video stream, its frames counted by decoding them.
+Probe ffprobe(const fs::path& file) {
+  const auto r = ctsurg::test::run_shell(
+      "ffprobe -v error -count_frames -select_streams v:0 -show_entries "
+      "stream=codec_name,pix_fmt,width,height,r_frame_rate,nb_read_frames -of default=noprint_wrappers=1 '" + file.string() + "'");
+  Probe p;
+  p.raw = r.output;
+  std::istringstream lines(r.output);
+  for (std::string line; std::getline(lines, line);) {
+    const auto eq = line.find('=');
+    if (eq == std::string::npos) continue;
+    const std::string key = line.substr(0, eq), value = line.substr(eq + 1);
+    if (key == "codec_name") p.codec = value;
+    if (key == "pix_fmt") p.pix_fmt = value;
+    if (key == "width") p.width = std::atoi(value.c_str());
+    if (key == "height") p.height = std::atoi(value.c_str());
+    if (key == "r_frame_rate") p.frame_rate = value;
+    if (key == "nb_read_frames") p.frames = std::atol(value.c_str());
+  }
+  return p;
+}
+
+// Six frames from the three-frame scene: the pull ramps up over frames 0..3, then the cut (4, 5).
+ctsurg::Trajectory six_frame_trajectory(const ctsurg::SurfaceMesh& s) {
+  const ctsurg::Trajectory three = ctsurg::test::three_frame_trajectory(s);
+  ctsurg::Trajectory t = three;
+  const std::size_t nv = s.vertices.size() / 3;
+  const int source[6] = {0, 1, 1, 1, 2, 2};
+  const double ramp[6] = {0.0, 1.0 / 3.0, 2.0 / 3.0, 1.0, 1.0, 1.0};
+  t.time.clear(), t.vertices.clear(), t.topology_of_frame.clear(), t.spheres.clear(), t.blades.clear();
+  t.metrics[0].values.clear();
+  for (int f = 0; f < 6; ++f) {
+    t.time.push_back(0.2 * f);
+    const int k = source[f];
+    for (std::size_t i = 0; i < 3 * nv; ++i) {
+      const float rest = three.vertices[i], moved = three.vertices[std::size_t(k) * 3 * nv + i];
+      t.vertices.push_back(k == 1 ? static_cast<float>(rest + ramp[f] * (moved - rest)) : moved);
+    }
+    t.topology_of_frame.push_back(three.topology_of_frame[std::size_t(k)]);
+    t.spheres.insert(t.spheres.end(), three.spheres.begin() + 4 * k, three.spheres.begin() + 4 * (k + 1));
+    t.blades.insert(t.blades.end(), three.blades.begin() + 7 * k, three.blades.begin() + 7 * (k + 1));
+    t.metrics[0].values.push_back(three.metrics[0].values[std::size_t(k)]);
+  }
+  return t;
+}
+
+}  // namespace
+
+// Byte-identical reruns are checked on the encoder alone (test_animation_export.cpp).
+TEST(CtsurgRender, WritesTrajectoriesAndTurntablesAsMp4AndGif) {
+  CTSURG_REQUIRE_FFMPEG();
+  Inputs in;
+  const fs::path six = in.dir / "six.h5";
+  ctsurg::write_trajectory_file(six, six_frame_trajectory(ctsurg::test::bumpy_organ_surface(24, 12, 64)),
+                                ctsurg::test::test_provenance());
+  struct Case {
+    std::string name;
+    std::vector<std::string> args;
+    int width, height;  // of the pictures; an MP4 rounds odd sides up to even
+    long frames;
+    std::string frame_rate;
+  };
+  const std::vector<Case> cases = {
+      {"trajectory", {"-s", in.surface.string(), "-t", six.string(), "--frames", "all", "--size", "64x48"}, 64, 48, 6, "10/1"},
+      // Odd sides: yuv420p needs even ones, the MP4 gets a black row and column.
+      {"turntable", {"-s", in.surface.string(), "--turntable", "5", "--size", "33x25", "--fps", "7.5"}, 33, 25, 5, "15/2"},
+  };
+  for (const Case& c : cases) {
+    for (const std::string suffix : {".mp4", ".gif"}) {
+      const fs::path out = in.dir / (c.name + suffix.substr(1));
+      fs::create_directory(out);
+      const fs::path video = out / (c.name + suffix);
+      std::vector<std::string> args = c.args;
+      args.insert(args.end(), {"-o", (out / "p_{}.png").string(), "--animation", video.string()});
+      const auto r = run_tool("ctsurg-render", args);
+      ASSERT_EQ(r.exit_code, 0) << c.name << suffix << ": " << r.output;
+      EXPECT_EQ(pngs(out).size(), std::size_t(c.frames)) << c.name;
+      const Probe p = ffprobe(video);
+      const bool mp4 = suffix == ".mp4";
+      EXPECT_EQ(p.codec, mp4 ? "h264" : "gif") << c.name << suffix << ": " << p.raw;
+      if (mp4) EXPECT_EQ(p.pix_fmt, "yuv420p") << c.name << ": " << p.raw;
+      EXPECT_EQ(p.width, mp4 ? (c.width + 1) / 2 * 2 : c.width) << c.name << suffix << ": " << p.raw;
+      EXPECT_EQ(p.height, mp4 ? (c.height + 1) / 2 * 2 : c.height) << c.name << suffix << ": " << p.raw;
+      EXPECT_EQ(p.frames, c.frames) << c.name << suffix << ": " << p.raw;
+      if (mp4) EXPECT_EQ(p.frame_rate, c.frame_rate) << c.name << ": " << p.raw;
+    }
+  }
+}
+
+TEST(CtsurgRender, ABadAnimationIsRefusedAndAFailedEncodeLeavesNothing) {
+  CTSURG_REQUIRE_FFMPEG();
+  Inputs in;
+  const fs::path out = in.dir / "out";
+  fs::create_directory(out);
+  const std::string tool = std::string(CTSURG_TOOL_DIR) + "/ctsurg-render -s " + in.surface.string() +
+                           " --turntable 2 --size 16 -o " + (out / "p_{}.png").string() + " --animation ";
+  // An unknown suffix: exit 2 naming the file and the field, before anything is rendered.
+  auto r = ctsurg::test::run_shell(tool + (out / "spin.avi").string());
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("spin.avi: suffix"), std::string::npos) << r.output;
+  EXPECT_TRUE(ctsurg::test::files_in(out).empty()) << r.output;
+  // No encoder on the PATH: exit 2 naming the encoder and how to install it.
+  r = ctsurg::test::run_shell("PATH=" + (in.dir / "empty").string() + " " + tool + (out / "spin.mp4").string());
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("spin.mp4: encoder"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("install-deps.sh"), std::string::npos) << r.output;
+  EXPECT_TRUE(ctsurg::test::files_in(out).empty()) << r.output;
+  // A failing encoder: exit 1, and the pictures are not committed either.
+  const fs::path bin = in.dir / "bin";
+  fs::create_directory(bin);
+  {
+    std::ofstream fake(bin / "ffmpeg");
+    fake << "#!/bin/sh\necho 'fake ffmpeg: disk on fire' >&2\nexit 3\n";
+  }
+  fs::permissions(bin / "ffmpeg", fs::perms::owner_all);
+  r = ctsurg::test::run_shell("PATH=" + bin.string() + ":$PATH " + tool + (out / "spin.gif").string());
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("spin.gif: the encoder (ffmpeg) exited with status 3: fake ffmpeg: disk on fire"),
+            std::string::npos) << r.output;
+  EXPECT_TRUE(ctsurg::test::files_in(out).empty()) << r.output;
 }

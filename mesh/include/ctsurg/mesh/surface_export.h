@@ -5,9 +5,12 @@
 // and, written by ctsurg itself (ASCII), the VTK formats 3D Slicer opens as models:
 //   .vtk (legacy PolyData, title line "... SPACE=LPS"), .vtp (XML PolyData, FieldData SPACE = "LPS"),
 //   both with the normals as point data "Normals"
-// Coordinates are written as they are: LPS millimetres (glTF's "metres, +Y up" convention is not
-// applied; a viewer shows the patient in mm with superior along +Z). Normals go with the vertices
-// where the format has them (not STL, which stores face normals only).
+// glTF (.glb, .gltf) follows its specification: metres, +Y up (superior), +Z front (anterior), +X
+// the patient's left, baked into the vertices by the one rotation of gltf_frame.h (det +1, so
+// winding, normals and tangent handedness stay right), and no extensions (the material is core
+// pbrMetallicRoughness + normalTexture). The other formats have no convention of their own and are
+// written as they are: LPS millimetres. Normals go with the vertices where the format has them
+// (not STL, which stores face normals only).
 // A mesh with uvs (and tangents) from ctsurg-normalmap exports them as texture coordinates (and,
 // for glTF, the TANGENT attribute, added after Assimp, whose 5.2 exporter drops it). With a normal
 // map the material (a PBR tissue colour) uses it as its normal texture: embedded (.glb: in the
