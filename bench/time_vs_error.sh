@@ -72,6 +72,10 @@ EOF
   done
   rm -f "$OUT/memory.yaml" "$OUT/memory.h5" "$OUT/memory.xdmf" "$OUT/memory.time"
 fi
-mkdir -p docs/img
-for f in "$OUT"/pareto_*.png; do cp "$f" docs/img/accuracy_$(basename "$f"); done
+# Only a full run's plots replace the documented ones (a QUICK or LOCAL_ONLY run has fewer levels or
+# configurations: its plots stay in OUT).
+if [[ -z ${QUICK:-} && -z ${LOCAL_ONLY:-} ]]; then
+  mkdir -p docs/img
+  for f in "$OUT"/pareto_*.png; do cp "$f" docs/img/accuracy_$(basename "$f"); done
+fi
 cat "$OUT/budgets.md"
