@@ -2,6 +2,7 @@
 
 #include "ctsurg/core/error.h"
 #include "ctsurg/core/input_file.h"
+#include "ctsurg/mesh/tet_mesh_export.h"
 #include "ctsurg/mesh/tet_mesh_quality.h"
 
 #include <nlohmann/json.hpp>
@@ -433,14 +434,8 @@ RawMesh read_vtu(const std::string& text, const std::string& file) {
 
 }  // namespace
 
-std::string tet_mesh_import_format(const std::filesystem::path& path) {
-  std::string ext = path.extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  if (ext == ".vtu") return "vtu";
-  if (ext == ".msh") return "msh";
-  if (ext == ".mesh") return "mesh";
-  return "";
-}
+// The formats ctsurg writes are the ones it reads back (tet_mesh_export.h).
+std::string tet_mesh_import_format(const std::filesystem::path& path) { return tet_mesh_export_format(path); }
 
 void compute_boundary_faces(TetMesh& mesh) {
   // Face (sorted triple) -> first (tet, local face), and how many tets hold it.
