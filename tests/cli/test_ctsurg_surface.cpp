@@ -233,13 +233,7 @@ TEST(CtsurgSurface, ExportsVtkAndVtpWithTheLpsMarker) {
   const std::string vtp = ctsurg::test::read_bytes(dir / "s.vtp");
   EXPECT_NE(vtp.find("Name=\"SPACE\""), std::string::npos);
   EXPECT_NE(vtp.find("Name=\"Normals\""), std::string::npos);
-  std::string python;
-  for (const std::string candidate : {"/usr/bin/python3", "python3"}) {
-    if (ctsurg::test::run_shell(candidate + " -c 'import vtk' 2>/dev/null").exit_code == 0) {
-      python = candidate;
-      break;
-    }
-  }
+  const std::string python = ctsurg::test::python_with_vtk();
   if (python.empty()) GTEST_SKIP() << "python3-vtk9 absent";
   const std::string script =
       "import vtk\n"

@@ -59,14 +59,7 @@ TEST(TetMeshExport, VtuReadsBackInVtk) {
   // A temporary name with the format taken from format_of, as the tool writes it.
   ctsurg::export_tet_mesh(dir / "tmp.part", two_tets(), "m.vtu");
   fs::rename(dir / "tmp.part", dir / "m.vtu");
-  // python3-vtk9 installs for the system Python; a python3 earlier on PATH (pyenv, venv) may lack it.
-  std::string python;
-  for (const std::string candidate : {"/usr/bin/python3", "python3"}) {
-    if (ctsurg::test::run_shell(candidate + " -c 'import vtk' 2>/dev/null").exit_code == 0) {
-      python = candidate;
-      break;
-    }
-  }
+  const std::string python = ctsurg::test::python_with_vtk();
   if (python.empty()) GTEST_SKIP() << "python3-vtk9 absent";
   const std::string script =
       "import vtk; r = vtk.vtkXMLUnstructuredGridReader(); r.SetFileName('" + (dir / "m.vtu").string() +

@@ -82,4 +82,10 @@ std::string read_bytes(const fs::path& path) {
 
 Provenance test_provenance() { return {"test", "0", {}, {}, nlohmann::json::array()}; }
 
+std::string python_with_vtk() {
+  for (const std::string candidate : {"/usr/bin/python3", "python3"})
+    if (run_shell(candidate + " -c 'import vtk' 2>/dev/null").exit_code == 0) return candidate;
+  return "";
+}
+
 }  // namespace ctsurg::test

@@ -30,6 +30,9 @@ struct CommandResult {
 CommandResult run_tool(const std::string& tool, const std::vector<std::string>& args);
 // Runs any shell command line.
 CommandResult run_shell(const std::string& command_line);
+// A Python that imports vtk (python3-vtk9 installs for the system Python; a python3 earlier on PATH,
+// pyenv or a venv, may lack it): "/usr/bin/python3" or "python3", or "" when neither has it.
+std::string python_with_vtk();
 
 // ../shared/data (real scans), or an empty path when it is not there.
 std::filesystem::path shared_data_dir();
