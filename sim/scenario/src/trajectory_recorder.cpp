@@ -24,9 +24,9 @@ TrajectoryRecorder::TrajectoryRecorder(const Scenario& s, const SimulationEngine
   traj_.scenario = s.name;
   traj_.model = model_label(s);
   if (engine.has_surface()) {
-    // A vessel's surface is drawn from its atoms: the trajectory's own triangles, no surface file (as an
-    // FEM run without one; ctsurg-render draws it without --surface). The centerline is in the provenance.
-    if (s.model != ModelKind::vessel) {
+    // A surface the engine draws itself (a vessel's, from its atoms) has no file: the trajectory's own
+    // triangles, which ctsurg-render draws without --surface. Only a scenario's surface file is named.
+    if (!s.surface.empty()) {
       traj_.surface_file = s.surface.string();
       traj_.surface_sha256 = sha256_file(s.surface);
     }
