@@ -8,6 +8,8 @@
 #include <cmath>
 #include <cstring>
 #include <sstream>
+#include <string>
+#include <vector>
 
 #include "ctsurg/core/error.h"
 #include "ctsurg/render/colour_map.h"
@@ -43,10 +45,16 @@ double nice_step(double max) {
 void draw_caption(RgbImage& image, const std::string& text) {
   if (text.empty() || image.empty()) return;
   cv::Mat m = as_mat(image);
-  const double scale = text_scale(image.height);
+  double scale = text_scale(image.height);
   const int thickness = scale > 0.7 ? 2 : 1;
   int baseline = 0;
-  const cv::Size size = cv::getTextSize(text, cv::FONT_HERSHEY_SIMPLEX, scale, thickness, &baseline);
+  cv::Size size = cv::getTextSize(text, cv::FONT_HERSHEY_SIMPLEX, scale, thickness, &baseline);
+  // Narrow pictures (a side-by-side panel, a small heat map): smaller text, so the caption fits.
+  const int room = image.width - 2 * std::max(2, int(std::lround(4 * scale)));
+  if (size.width > room && room > 0) {
+    scale = std::max(0.25, scale * room / size.width);
+    size = cv::getTextSize(text, cv::FONT_HERSHEY_SIMPLEX, scale, thickness, &baseline);
+  }
   const int pad = std::max(2, int(std::lround(4 * scale)));
   cv::rectangle(m, cv::Rect(0, 0, std::min(image.width, size.width + 2 * pad), size.height + baseline + 2 * pad),
                 cv::Scalar(0, 0, 0), cv::FILLED);
@@ -111,28 +119,76 @@ RgbImage overlay(const RgbImage& a, const RgbImage& b) {
   return out;
 }
 
+// The title's words wrapped greedily into lines no wider than `width` pixels at `scale`.
+static std::vector<std::string> wrapped_lines(const std::string& title, double scale, int thickness, int width) {
+  std::vector<std::string> words, lines;
+  std::istringstream in(title);
+  for (std::string w; in >> w;) words.push_back(w);
+  int baseline = 0;
+  const auto width_of = [&](const std::string& t) {
+    return cv::getTextSize(t, cv::FONT_HERSHEY_SIMPLEX, scale, thickness, &baseline).width;
+  };
+  // A word wider than a line on its own (a long file name) is broken between characters.
+  std::vector<std::string> pieces;
+  for (const std::string& w : words) {
+    std::string piece;
+    for (const char c : w) {
+      if (!piece.empty() && width_of(piece + c) > width) pieces.push_back(piece), piece.clear();
+      piece += c;
+    }
+    pieces.push_back(piece);
+  }
+  words = pieces;
+  for (const std::string& w : words) {
+    const std::string joined = lines.empty() ? w : lines.back() + " " + w;
+    if (!lines.empty() && width_of(joined) <= width)
+      lines.back() = joined;
+    else
+      lines.push_back(w);
+  }
+  return lines;
+}
+
 RgbImage append_colour_bar(const RgbImage& image, double max_mm, const std::string& title) {
   const int h = image.height;
   const double scale = text_scale(h);
+  const int thickness = 1;
   const int bar_w = std::max(8, h / 24), margin_x = std::max(6, h / 40);
   const int label_w = int(std::lround(70 * scale)) + 8;
-  const int panel_w = margin_x + bar_w + 6 + label_w;
+  // The title sits in the panel, above the bar, never over the picture: the panel widens (up to twice
+  // its width) for the title's longest word, the text shrinks (down to 0.6x) when even that is too
+  // narrow, and lines wrap at word boundaries (a longer word, a file name, between characters).
+  double title_scale = 0.8 * scale;
+  int baseline = 0;
+  int longest_word = 0;
+  {
+    std::istringstream in(title);
+    for (std::string w; in >> w;)
+      longest_word = std::max(longest_word, cv::getTextSize(w, cv::FONT_HERSHEY_SIMPLEX, title_scale, thickness, &baseline).width);
+  }
+  const int base_panel_w = margin_x + bar_w + 6 + label_w;
+  const int panel_w = std::max(base_panel_w, std::min(longest_word + 4, 2 * base_panel_w));
+  const int title_room = panel_w - 4;
+  if (longest_word > title_room) title_scale = std::max(0.6 * title_scale, title_scale * title_room / longest_word);
+  const std::vector<std::string> lines = wrapped_lines(title, title_scale, thickness, title_room);
+  const int line_h = cv::getTextSize("Ag", cv::FONT_HERSHEY_SIMPLEX, title_scale, thickness, &baseline).height + baseline + 2;
+  const int title_h = int(lines.size()) * line_h;
+  const int top = std::max(int(std::lround(h * 0.14)), title_h + int(std::lround(8 * scale)) + 2);
+  const int bottom = std::max(top + 8, int(std::lround(h * 0.92)));
   RgbImage out(image.width + panel_w, h, 255);
   for (int y = 0; y < h; ++y) std::memcpy(out.pixel(0, y), image.pixel(0, y), 3 * static_cast<std::size_t>(image.width));
   // Panel background: the picture's background colour (its top-left pixel) keeps the look uniform.
   const uint8_t* bg = image.pixel(0, 0);
   for (int y = 0; y < h; ++y)
     for (int x = image.width; x < out.width; ++x) std::memcpy(out.pixel(x, y), bg, 3);
-  const int top = int(std::lround(h * 0.14)), bottom = int(std::lround(h * 0.92));
   const int x0 = image.width + margin_x;
-  for (int y = top; y <= bottom; ++y) {
+  for (int y = top; y <= bottom && y < h; ++y) {
     const double t = double(bottom - y) / double(bottom - top);
     const auto c = turbo_colour(t);
     for (int x = x0; x < x0 + bar_w; ++x) std::memcpy(out.pixel(x, y), c.data(), 3);
   }
   cv::Mat m = as_mat(out);
   const cv::Scalar white(235, 235, 235);
-  const int thickness = 1;
   cv::rectangle(m, cv::Rect(x0, top, bar_w, bottom - top + 1), white, 1);
   const double step = nice_step(max_mm);
   for (int k = 0;; ++k) {
@@ -143,13 +199,12 @@ RgbImage append_colour_bar(const RgbImage& image, double max_mm, const std::stri
     cv::putText(m, tick_label(value, step), cv::Point(x0 + bar_w + 7, y + int(5 * scale)), cv::FONT_HERSHEY_SIMPLEX,
                 0.8 * scale, white, thickness, cv::LINE_AA);
   }
-  // Title above the bar, right-aligned to the picture's edge so long titles stay inside.
-  int baseline = 0;
-  const double title_scale = 0.8 * scale;
-  const cv::Size ts = cv::getTextSize(title, cv::FONT_HERSHEY_SIMPLEX, title_scale, thickness, &baseline);
-  const int tx = std::max(0, out.width - ts.width - 4);
-  cv::putText(m, title, cv::Point(tx, top - int(8 * scale) - 2), cv::FONT_HERSHEY_SIMPLEX, title_scale, white, thickness,
-              cv::LINE_AA);
+  // Each title line left-aligned at the panel's inner edge (clipped to the panel by construction).
+  for (std::size_t i = 0; i < lines.size(); ++i) {
+    const int y = int(i + 1) * line_h - baseline + 1;
+    cv::putText(m, lines[i], cv::Point(image.width + 2, y), cv::FONT_HERSHEY_SIMPLEX, title_scale, white, thickness,
+                cv::LINE_AA);
+  }
   return out;
 }
 

@@ -10,7 +10,8 @@
 
 namespace ctsurg {
 
-// Writes `text` in white on a dark band at the top-left corner of `image` (scaled to its size).
+// Writes `text` in white on a dark band at the top-left corner of `image` (scaled to its size, and
+// smaller, down to a 0.25 font scale, where the picture is too narrow for it).
 void draw_caption(RgbImage& image, const std::string& text);
 // Writes a legend entry at the bottom-left corner of `image`: on a dark band, a swatch of `rgb` hatched as
 // the renderer hatches the FEM local region (surface_renderer.h) with a dark interface line under it,
@@ -22,7 +23,10 @@ RgbImage side_by_side(const std::vector<RgbImage>& images);
 // (render them in different colours). InputError when sizes differ.
 RgbImage overlay(const RgbImage& a, const RgbImage& b);
 // `image` widened on the right by a vertical Turbo colour bar from 0 (bottom) to max_mm (top) with
-// tick labels in mm and `title` (e.g. "displacement (mm)").
+// tick labels in mm and `title` (e.g. "displacement (mm)") above the bar, inside the added panel:
+// the panel widens (up to 2x) for the title's longest word, the text shrinks (down to 0.6x) when that
+// is not enough, and lines wrap at spaces (a longer word between characters). Nothing is drawn over
+// `image`.
 RgbImage append_colour_bar(const RgbImage& image, double max_mm, const std::string& title);
 
 }  // namespace ctsurg
