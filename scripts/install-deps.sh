@@ -21,21 +21,31 @@ packages=(
   snakemake
   # video: ctsurg-render --animation .gif/.mp4 (H.264) and ffprobe in its tests
   ffmpeg
-  # the Khronos glTF validator the tests run on every .glb/.gltf (npm package, tests/support/gltf)
+  # npm packages (below): the Khronos glTF validator the tests run on every .glb/.gltf, and the HTML
+  # viewer that ctsurg-render --viewer embeds at build time
   nodejs npm
+  # the browser the HTML viewer's test opens (headless, WebGL on the CPU through SwiftShader)
+  chromium
 )
 
-# npm ci in tests/support/gltf (gltf-validator, pinned by its package-lock.json), only when
-# node_modules is missing or was installed from another lock: reruns stay offline.
-install_gltf_validator() {
-  local dir lock stamp
-  dir="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)/tests/support/gltf"
-  lock="$(sha256sum "$dir/package-lock.json" | cut -d' ' -f1)"
-  stamp="$dir/node_modules/.ctsurg-lock.sha256"
-  [[ -f "$stamp" && "$(cat "$stamp")" == "$lock" ]] && return 0
-  echo "install-deps: npm ci in $dir"
-  (cd "$dir" && npm ci --no-audit --no-fund --loglevel=error >/dev/null)
-  echo "$lock" >"$stamp"
+# The folders with a package.json and a pinned package-lock.json: tests/support/gltf (gltf-validator),
+# render/viewer (@google/model-viewer, read by render/CMakeLists.txt at build time).
+npm_folders=(tests/support/gltf render/viewer)
+
+# npm ci in each npm folder, only when its node_modules is missing or was installed from another lock:
+# reruns stay offline.
+install_npm_packages() {
+  local root folder dir lock stamp
+  root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+  for folder in "${npm_folders[@]}"; do
+    dir="$root/$folder"
+    lock="$(sha256sum "$dir/package-lock.json" | cut -d' ' -f1)"
+    stamp="$dir/node_modules/.ctsurg-lock.sha256"
+    [[ -f "$stamp" && "$(cat "$stamp")" == "$lock" ]] && continue
+    echo "install-deps: npm ci in $dir"
+    (cd "$dir" && npm ci --no-audit --no-fund --loglevel=error >/dev/null)
+    echo "$lock" >"$stamp"
+  done
 }
 
 missing=()
@@ -45,7 +55,7 @@ for p in "${packages[@]}"; do
 done
 if ((${#missing[@]} == 0)); then
   echo "install-deps: all ${#packages[@]} packages present"
-  install_gltf_validator
+  install_npm_packages
   exit 0
 fi
 SUDO=""
@@ -54,5 +64,5 @@ echo "install-deps: installing ${#missing[@]} packages: ${missing[*]}"
 export DEBIAN_FRONTEND=noninteractive
 $SUDO apt-get update -qq
 $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
-install_gltf_validator
+install_npm_packages
 echo "install-deps: done"

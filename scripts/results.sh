@@ -31,5 +31,8 @@ for s in "$@"; do
   for p in $(sed -n "s/^\([^ :]*\.\(png\|frames\)\): .*/\1/p" "$out/mk/$stem.mk"); do
     printf '    %-30s %s\n' "$(basename "$p")" "picture"
   done
+  for p in $(sed -n "s/^\([^ :]*\.html\) [^ ]*\.glb &: .*/\1/p" "$out/mk/$stem.mk"); do
+    printf '    %-30s %s\n' "$(basename "$p")" "3D viewer: open in a browser, offline (animated glTF: $(basename "${p%.html}").glb)"
+  done
 done
 say comparison.md "model comparison table (volume, area, displacement)"

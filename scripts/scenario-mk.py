@@ -8,7 +8,8 @@ The fragment comes from `ctsurg-sim --describe S.yaml`: the stage outputs the sc
 (grid.h5, surface.h5, surface_textured.h5, tetmesh.h5, centerline.h5, named relative to the scenario's folder)
 become prerequisites in PATIENT_OUT, the trajectory becomes PATIENT_OUT/<its file name>, and each
 render request becomes one ctsurg-render rule (PATIENT_OUT/<name>.png, or a folder of pictures plus
-PATIENT_OUT/<name>.frames for multi-frame requests). A render reference names another scenario of the
+PATIENT_OUT/<name>.frames for multi-frame requests, or for layout viewer PATIENT_OUT/<name>.glb and
+<name>.html: the frames as an animated glTF and the offline page that plays it). A render reference names another scenario of the
 same patient (its file stem, its `name:` or its trajectory file) or a stage output (surface.h5 ...).
 Nothing else is built for this scenario, so Make never makes a stage output no scenario needs.
 
@@ -123,7 +124,14 @@ def main():
         surface_opt = f"--surface {q(surface)} " if surface else ""
         common = (f"{surface_opt}--trajectory {q(traj)} --layout {q(r['layout'])} --frames {q(frames)} "
                   f"--view {q(r['view'])} --size {int(r['size'])}{ref_opt} $({key}.RENDER_ARGS)")
-        if multi:
+        if r["layout"] == "viewer":
+            # The frames as an animated glTF and the offline HTML page that plays it (docs/render.md).
+            target = f"{out}/{r['name']}.html"
+            glb = f"{out}/{r['name']}.glb"
+            lines += [f"{target} {glb} &: {' '.join(pre)} $(BIN)/ctsurg-render",
+                      f"\t$(BIN)/ctsurg-render -q {surface_opt}--trajectory {q(traj)} --frames {q(frames)} "
+                      f"--gltf {q(glb)} --viewer {q(target)} $({key}.RENDER_ARGS)"]
+        elif multi:
             target = f"{out}/{r['name']}.frames"
             folder = f"{out}/{r['name']}"
             lines += [f"{target}: {' '.join(pre)} $(BIN)/ctsurg-render",

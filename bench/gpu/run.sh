@@ -30,7 +30,7 @@ step() {  # step <name> <command...>: runs, logs to $build/<name>.log, records p
 mkdir -p "$build"
 results=()
 nvidia-smi --query-gpu=name,driver_version,memory.total,clocks.max.memory --format=csv >"$build/nvidia-smi.txt" 2>&1 || true
-step configure cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release -DCTSURG_CUDA=ON \
+step configure cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release -DCTSURG_CUDA=ON -DCTSURG_HTML_VIEWER=OFF \
   "-DCMAKE_CUDA_ARCHITECTURES=$archs"
 step build cmake --build "$build" -j "$jobs" --target test_device_simulation test_backend test_spring_mass_step \
   test_explicit_spring_model test_sphere_tools test_spring_cutting test_surface_coupling test_scenario_gpu ctsurg-sim \

@@ -102,6 +102,11 @@ DetailField detail_field_from_labels(const Volume<uint16_t>& labels, double sigm
   return make_field(gaussian_smoothed(indicator, sigma_mm, threads), 0.5);
 }
 
+DetailField detail_field_from_anti_aliased_labels(const Volume<uint16_t>& labels, const AntiAliasOptions& options,
+                                                  AntiAliasStats* stats) {
+  return make_field(anti_aliased_mask(labels, options, stats), 0.0);
+}
+
 DetailField detail_field_from_values(const Volume<float>& values, double iso, double sigma_mm, int threads) {
   if (!std::isfinite(iso)) throw InputError("--iso", "", "must be a finite number");
   return make_field(gaussian_smoothed(values, sigma_mm, threads), iso);

@@ -4,6 +4,7 @@
 #include "ctsurg/core/error.h"
 #include "ctsurg/core/library_messages.h"
 #include "ctsurg/mesh/gltf_frame.h"
+#include "ctsurg/mesh/gltf_material.h"
 #include "ctsurg/mesh/normal_map_png.h"
 
 #include <assimp/Exporter.hpp>
@@ -162,8 +163,7 @@ void finish_gltf(std::vector<std::pair<std::string, std::string>>& files, bool b
     bin = *bin_file;
   }
   strip_gltf_extensions(j);
-  j["asset"]["extras"] = {{"ctsurg_frame", "metres; glTF +X = patient left, +Y = superior, +Z = anterior "
-                                           "(from LPS millimetres: x, z, -y times 0.001)"}};
+  j["asset"]["extras"] = {{"ctsurg_frame", kGltfFrameNote}};
   if (!g.tangents.empty() && !mesh.uvs.empty()) {
     auto& primitive = j.at("meshes").at(0).at("primitives").at(0);
     // The floats of a tightly packed float accessor.
@@ -379,15 +379,20 @@ std::vector<std::pair<std::string, std::string>> export_surface_mesh(const std::
     tex.pcData = new aiTexel[(png.size() + sizeof(aiTexel) - 1) / sizeof(aiTexel)];
     std::memcpy(tex.pcData, png.data(), png.size());
   }
-  if (!mesh.normal_map.empty()) {
-    // The material's normalTexture points at the map, so any glTF viewer shows the baked detail.
+  {
+    // The tissue material (gltf_material.h), the same with or without a map; with one, its
+    // normalTexture points at the map, so any glTF viewer shows the baked detail.
     aiMaterial& mat = *scene.mMaterials[0];
-    const aiString name("tissue"), texture_path(normal_map_uri.empty() ? std::string("*0") : normal_map_uri);
+    const aiString name("tissue");
     mat.AddProperty(&name, AI_MATKEY_NAME);
-    mat.AddProperty(&texture_path, AI_MATKEY_TEXTURE(aiTextureType_NORMALS, 0));
-    const aiColor4D tissue(0.80f, 0.42f, 0.38f, 1.0f);
+    if (!mesh.normal_map.empty()) {
+      const aiString texture_path(normal_map_uri.empty() ? std::string("*0") : normal_map_uri);
+      mat.AddProperty(&texture_path, AI_MATKEY_TEXTURE(aiTextureType_NORMALS, 0));
+    }
+    const std::array<double, 4> c = gltf_linear_colour(kGltfTissueOnScreen);  // glTF's base colour is linear
+    const aiColor4D tissue{static_cast<float>(c[0]), static_cast<float>(c[1]), static_cast<float>(c[2]), 1.0f};
     mat.AddProperty(&tissue, 1, AI_MATKEY_COLOR_DIFFUSE);
-    const float metallic = 0.0f, roughness = 0.55f;
+    const float metallic = float(kGltfTissueMetallic), roughness = float(kGltfTissueRoughness);
     mat.AddProperty(&metallic, 1, AI_MATKEY_METALLIC_FACTOR);
     mat.AddProperty(&roughness, 1, AI_MATKEY_ROUGHNESS_FACTOR);
   }

@@ -1,7 +1,8 @@
 // ctsurg-normalmap SURFACE.h5 FIELD.h5 OUTPUT.h5: a UV atlas, tangent frames and a tangent-space
-// normal map for a coarse surface, baked from the full-resolution tissue (an occupancy grid's /mask)
-// or CT (an HU volume's /hu at --iso), written as a ctsurg surface file, optionally a PNG and a
-// .glb/.gltf whose material uses the map.
+// normal map for a coarse surface, baked from the full-resolution tissue (an occupancy grid's /mask,
+// anti-aliased by default, or Gaussian-smoothed with --detail gaussian) or CT (an HU volume's /hu at
+// --iso), written as a ctsurg surface file, optionally a PNG and a .glb/.gltf whose material uses the
+// map.
 #include <spdlog/spdlog.h>
 
 #include <chrono>
@@ -36,19 +37,39 @@ std::string suffix(const fs::path& p) {
   return ext;
 }
 
-// The detail field: the tissue labels of an occupancy grid (/mask) or an HU volume at `iso`.
-ctsurg::DetailField read_detail_field(const fs::path& input, std::optional<double> iso, double sigma_mm, int threads,
-                                      std::string& described) {
+// The detail field: the tissue labels of an occupancy grid (/mask; `detail` "antialias", the default,
+// or "gaussian") or an HU volume at `iso` (Gaussian only).
+ctsurg::DetailField read_detail_field(const fs::path& input, std::optional<double> iso, const std::string& detail,
+                                      double sigma_mm, int threads, std::string& described) {
   const std::string format = ctsurg::ctsurg_file_format(input);
   if (format == "occupancy_grid") {
     if (iso)
-      throw ctsurg::InputError("--iso", "", input.string() + " is an occupancy grid: its /mask is baked at 0.5; drop --iso");
+      throw ctsurg::InputError("--iso", "", input.string() + " is an occupancy grid: its /mask is baked at its boundary; drop --iso");
     const ctsurg::OccupancyGrid grid = ctsurg::read_occupancy_grid_file(input);
+    if (detail != "gaussian") {
+      ctsurg::AntiAliasOptions options;
+      if (sigma_mm >= 0.0) options.sigma_mm = sigma_mm;
+      options.threads = threads;
+      ctsurg::AntiAliasStats stats;
+      const auto start = std::chrono::steady_clock::now();
+      ctsurg::DetailField field = ctsurg::detail_field_from_anti_aliased_labels(grid.mask, options, &stats);
+      const auto& k = stats.blocks.factor;
+      const Eigen::Vector3d native = grid.mask.geometry.spacing.cwiseProduct(Eigen::Vector3d(k[0], k[1], k[2]));
+      described = fmt::format(
+          "/mask (tissue != 0) anti-aliased on its {}lattice ({:.3g} x {:.3g} x {:.3g} mm), start sigma {:.3g} mm, {} "
+          "iterations, {:.3f} mm off at most before the last clamp ({:.2f} s)",
+          k == std::array<int, 3>{1, 1, 1} ? "" : fmt::format("own {} x {} x {} blocks' ", k[0], k[1], k[2]), native[0],
+          native[1], native[2], sigma_mm >= 0.0 ? sigma_mm : ctsurg::kDefaultSigmaVoxels * native.maxCoeff(), stats.iterations,
+          stats.last_violation_mm, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+      return field;
+    }
     const double sigma = sigma_mm >= 0.0 ? sigma_mm : grid.mask.geometry.spacing.maxCoeff();
     described = fmt::format("/mask (tissue != 0), Gaussian sigma {:.3g} mm, iso 0.5", sigma);
     return ctsurg::detail_field_from_labels(grid.mask, sigma, threads);
   }
   if (format == "hu_volume") {
+    if (detail == "antialias")
+      throw ctsurg::InputError("--detail", "", input.string() + " is an HU volume: its detail is Gaussian-smoothed; antialias is for masks");
     if (!iso) throw ctsurg::InputError("--iso", "", input.string() + " is an HU volume: give the isovalue in HU, e.g. --iso 150");
     const ctsurg::HuVolume hu = ctsurg::read_hu_volume_file(input);
     const double sigma = sigma_mm >= 0.0 ? sigma_mm : hu.hu.geometry.spacing.maxCoeff();
@@ -88,7 +109,7 @@ void check_overlap(const ctsurg::SurfaceMesh& surface, const std::string& surfac
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::string surface_path, field_path, output, png_path, mesh_path;
+  std::string surface_path, field_path, output, png_path, mesh_path, detail;
   double iso = 0.0, sigma_mm = -1.0, search_mm = 0.0, max_angle_deg = 60.0;
   int size = 2048, bits = 8, padding = 4, dilate = 2, threads = 0;
   CLI::Option* iso_opt = nullptr;
@@ -113,8 +134,12 @@ int main(int argc, char** argv) {
         app.add_option("--dilate", dilate, "Texels the charts are dilated into the padding")
             ->capture_default_str()
             ->check(CLI::Range(0, 64));
+        app.add_option("--detail", detail,
+                       "The mask's detail field: antialias (default: smooth, every voxel on its side, on the mask's own "
+                       "lattice) or gaussian (the indicator smoothed by --sigma-mm); HU volumes: gaussian only");
         app.add_option("--sigma-mm", sigma_mm,
-                       "Gaussian smoothing of the full-resolution field, mm (default: its largest voxel spacing)")
+                       "Gaussian smoothing, mm: antialias: of its start field (default: 2 of the mask's own voxels); "
+                       "gaussian: of the whole field (default: its largest voxel spacing)")
             ->check(CLI::NonNegativeNumber);
         iso_opt = app.add_option("--iso", iso, "Isovalue in HU (HU volumes only)");
         app.add_option("--search-mm", search_mm, "Search range along the normal, mm (default: one grid cell)")
@@ -137,6 +162,8 @@ int main(int argc, char** argv) {
         }
         if (padding > size / 8) throw ctsurg::InputError("--padding", "", "must be at most --size / 8");
         if (*iso_opt && !std::isfinite(iso)) throw ctsurg::InputError("--iso", "", "must be a finite number");
+        if (!detail.empty() && detail != "antialias" && detail != "gaussian")
+          throw ctsurg::InputError("--detail", "", "'" + detail + "': use antialias or gaussian");
         {
           std::vector<fs::path> outputs{out_path, ctsurg::xdmf_path_for(out_path)};
           if (!png_path.empty()) outputs.emplace_back(png_path);
@@ -153,7 +180,7 @@ int main(int argc, char** argv) {
         }
         std::string described;
         const ctsurg::DetailField field =
-            read_detail_field(field_path, *iso_opt ? std::optional<double>(iso) : std::nullopt, sigma_mm, threads, described);
+            read_detail_field(field_path, *iso_opt ? std::optional<double>(iso) : std::nullopt, detail, sigma_mm, threads, described);
         check_overlap(coarse, surface_path, field, field_path);
         spdlog::info("{}: {} vertices, {} triangles; detail from {}: {}", surface_path, coarse.vertex_count(),
                      coarse.triangle_count(), field_path, described);

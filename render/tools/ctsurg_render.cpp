@@ -1,6 +1,7 @@
 // ctsurg-render --surface S.h5 [--trajectory T.h5] -o OUT.png: pictures of a surface or of a
 // simulation's frames (normal-mapped, offscreen OpenGL 4.5 core through OSMesa), turntables, and
-// comparisons (side by side, overlay, heat map with a colour bar in mm); optionally an animation.
+// comparisons (side by side, overlay, heat map with a colour bar in mm); optionally an animation; and the
+// trajectory as an animated glTF (--gltf) and a self-contained HTML page that plays it (--viewer).
 #include <spdlog/spdlog.h>
 
 #include <chrono>
@@ -15,6 +16,8 @@
 #include "ctsurg/core/tool_app.h"
 #include "ctsurg/core/trajectory_file.h"
 #include "ctsurg/render/animation_export.h"
+#include "ctsurg/render/gltf_animation.h"
+#include "ctsurg/render/html_viewer.h"
 #include "ctsurg/render/render_pictures.h"
 #include "ctsurg/render/trajectory_surface.h"
 
@@ -53,10 +56,10 @@ void check_same_surface(const ctsurg::Trajectory& trajectory, const std::string&
 
 int main(int argc, char** argv) {
   std::string surface_path, trajectory_path, output, frames_spec, view_spec = "anterior", projection = "perspective";
-  std::string layout = "single", reference = "rest", animation;
+  std::string layout = "single", reference = "rest", animation, gltf, viewer;
   std::string size_spec = "512";
   int samples = 4, turntable = 0;
-  double heat_max = 0.0, fps = 10.0;
+  double heat_max = 0.0, fps = 10.0, time_scale = 1.0;
   bool no_normal_map = false, no_tools = false, no_captions = false, no_region = false;
   return ctsurg::run_tool(
       argc, argv, "ctsurg-render",
@@ -73,8 +76,7 @@ int main(int argc, char** argv) {
         app.add_option("--trajectory,-t", trajectory_path, "Trajectory file (.h5) simulated on that surface");
         app.add_option("--output,-o", output,
                        "PNG to write; with several pictures it must contain {} (replaced by the frame number, "
-                       "'rest' or 'turnNNN')")
-            ->required();
+                       "'rest' or 'turnNNN'). Optional with --gltf or --viewer");
         app.add_option("--frames", frames_spec,
                        "Frames: rest, last, all, N, A:B, A:B:STEP, or a comma list (default: last with a trajectory, "
                        "else rest)");
@@ -102,6 +104,16 @@ int main(int argc, char** argv) {
             ->check(CLI::Range(1, 3600));
         app.add_option("--animation", animation, "Also write the pictures as an animation: .gif or .mp4 (needs ffmpeg or ImageMagick)");
         app.add_option("--fps", fps, "Animation frames per second")->capture_default_str()->check(CLI::Range(0.1, 120.0));
+        app.add_option("--gltf", gltf,
+                       "Also write the trajectory (--frames, default all) as an animated glTF: .glb or .gltf (+ .bin); "
+                       "morph targets keyed in time, the normal map, metres +Y up; one node per topology after cuts");
+        app.add_option("--viewer", viewer,
+                       "Also write a self-contained HTML page (.html) that plays that glTF in a browser, offline, with "
+                       "orbit controls");
+        app.add_option("--time-scale", time_scale,
+                       "glTF and viewer playback seconds per simulated second (e.g. 10: ten times slower)")
+            ->capture_default_str()
+            ->check(CLI::PositiveNumber);
         app.add_flag("--no-normal-map", no_normal_map, "Ignore the surface's normal map (geometry normals only)");
         app.add_flag("--no-tools", no_tools, "Do not draw the trajectory's spheres and blades");
         app.add_flag("--no-captions", no_captions, "No frame and model captions (and no region legend) on the pictures");
@@ -112,7 +124,16 @@ int main(int argc, char** argv) {
       [&](const ctsurg::ToolContext&) {
         const auto start = std::chrono::steady_clock::now();
         // Arguments first, so bad usage fails before any file is read.
-        if (lower_suffix(output) != ".png") throw ctsurg::InputError(output, "suffix", "the output is a PNG: use .png");
+        if (output.empty() && gltf.empty() && viewer.empty()) {
+          throw ctsurg::InputError("--output", "", "give -o OUT.png (pictures), --gltf OUT.glb or --viewer OUT.html");
+        }
+        const bool pictures = !output.empty();
+        if (pictures && lower_suffix(output) != ".png") throw ctsurg::InputError(output, "suffix", "the output is a PNG: use .png");
+        if (!pictures && !animation.empty()) throw ctsurg::InputError("--animation", "", "animates the pictures: give -o OUT.png too");
+        if (!gltf.empty() && ctsurg::gltf_animation_format(gltf).empty()) {
+          throw ctsurg::InputError(gltf, "suffix", "--gltf writes .glb (binary) or .gltf (JSON with a .bin beside it)");
+        }
+        if (!viewer.empty()) ctsurg::check_html_viewer_output(viewer);
         ctsurg::PictureRequest request;
         {
           const auto x = size_spec.find('x');
@@ -159,10 +180,13 @@ int main(int argc, char** argv) {
                                                         : ctsurg::read_surface_mesh_file(surface_path);
         if (own_surface) surface_path = trajectory_path;  // names the model in captions and errors
         ctsurg::RenderModel model{&surface, surface_path, trajectory ? &*trajectory : nullptr, trajectory_path};
+        std::vector<int64_t> gltf_frames;
         if (trajectory) {
           if (!own_surface) check_same_surface(*trajectory, trajectory_path, surface_path);
           ctsurg::check_trajectory_matches_surface(*trajectory, trajectory_path, surface, surface_path);
           request.frames = ctsurg::parse_frames(frames_spec.empty() ? "last" : frames_spec, trajectory->frame_count());
+          // The glTF and the viewer play every frame unless --frames says which.
+          gltf_frames = ctsurg::parse_frames(frames_spec.empty() ? "all" : frames_spec, trajectory->frame_count());
         } else if (!frames_spec.empty() && frames_spec != "rest") {
           throw ctsurg::InputError("--frames", "", "'" + frames_spec + "' needs --trajectory; without one only the rest surface is drawn");
         }
@@ -203,12 +227,17 @@ int main(int argc, char** argv) {
         }
         const std::size_t expected = request.turntable_steps > 0 ? static_cast<std::size_t>(request.turntable_steps)
                                                                   : std::max<std::size_t>(1, request.frames.size());
-        if (expected > 1 && output.find("{}") == std::string::npos) {
+        if (pictures && expected > 1 && output.find("{}") == std::string::npos) {
           throw ctsurg::InputError(output, "name", std::to_string(expected) + " pictures: the output name needs {} for the frame number");
         }
         {
-          std::vector<fs::path> outputs{output_name(output, "x")};
+          std::vector<fs::path> outputs;
+          if (pictures) outputs.push_back(output_name(output, "x"));
           if (!animation.empty()) outputs.emplace_back(animation);
+          if (!gltf.empty()) {
+            for (const fs::path& p : ctsurg::gltf_animation_files(gltf)) outputs.push_back(p);
+          }
+          if (!viewer.empty()) outputs.emplace_back(viewer);
           std::vector<fs::path> inputs{surface_path, trajectory_path};
           if (reference != "rest") inputs.emplace_back(reference);
           ctsurg::check_output_paths(outputs, inputs);  // pictures are .png, inputs .h5: a pattern cannot hit one
@@ -218,7 +247,7 @@ int main(int argc, char** argv) {
         ctsurg::OutputUnit outputs;
         std::vector<std::vector<uint8_t>> animation_frames;  // PNG bytes, as written
         std::vector<fs::path> written;
-        ctsurg::render_pictures(model, request, [&](ctsurg::Picture&& picture) {
+        if (pictures) ctsurg::render_pictures(model, request, [&](ctsurg::Picture&& picture) {
           std::vector<uint8_t> png = ctsurg::encode_png(picture.image);
           ctsurg::AtomicOutput& out = outputs.add(output_name(output, picture.tag));
           ctsurg::write_file_checked(out.temp_path(),
@@ -228,10 +257,51 @@ int main(int argc, char** argv) {
           if (!animation.empty()) animation_frames.push_back(std::move(png));
         });
         if (!animation.empty()) ctsurg::write_animation_png(animation, animation_frames, fps, &outputs);
+        if (!gltf.empty() || !viewer.empty()) {
+          // The trajectory's frames (none with --frames rest: the surface alone), as morph targets.
+          const bool animated = trajectory && !gltf_frames.empty();
+          ctsurg::GltfAnimationOptions options;
+          options.frames = gltf_frames;
+          options.time_scale = time_scale;
+          options.normal_map = !no_normal_map;
+          options.trajectory_name = trajectory_path;
+          const ctsurg::Trajectory* played = animated ? &*trajectory : nullptr;
+          const auto gltf_start = std::chrono::steady_clock::now();
+          ctsurg::GltfAnimationSummary summary;
+          std::string glb;
+          if (!gltf.empty()) {
+            glb = ctsurg::add_gltf_animation(outputs, gltf, surface, played, options, &summary);
+            spdlog::info("{}: {} frame{}, {} morph target{} ({} sparse or empty accessors), {} node{}: {:.1f} MB in {:.2f} s",
+                         gltf, summary.frames, summary.frames == 1 ? "" : "s", summary.morph_targets,
+                         summary.morph_targets == 1 ? "" : "s", summary.sparse_targets, summary.nodes,
+                         summary.nodes == 1 ? "" : "s", static_cast<double>(summary.bytes) / 1e6,
+                         std::chrono::duration<double>(std::chrono::steady_clock::now() - gltf_start).count());
+          }
+          if (!viewer.empty()) {
+            // The page embeds a .glb: the one just written, or one made for it.
+            if (glb.empty() || ctsurg::gltf_animation_format(gltf) != "glb") {
+              glb = std::move(ctsurg::export_gltf_animation(fs::path(viewer).replace_extension(".glb"), surface, played, options).front().second);
+            }
+            ctsurg::HtmlViewerOptions page;
+            page.title = fs::path(animated ? trajectory_path : surface_path).filename().string();
+            page.time_offset_s = animated ? trajectory->time[static_cast<std::size_t>(gltf_frames.front())] : 0.0;
+            page.time_scale = time_scale;
+            page.time_end_s = animated ? trajectory->time[static_cast<std::size_t>(gltf_frames.back())] : 0.0;
+            const std::size_t bytes = ctsurg::add_html_viewer(outputs, viewer, glb, page);
+            spdlog::info("{}: an HTML page playing the glTF ({}): {:.1f} MB", viewer, ctsurg::html_viewer_library(),
+                         static_cast<double>(bytes) / 1e6);
+          }
+        }
         outputs.commit();
-        spdlog::info("wrote {} picture{} ({}{}) in {:.2f} s", written.size(), written.size() == 1 ? "" : "s",
-                     written.size() == 1 ? written.front().string() : output,
-                     animation.empty() ? "" : ", " + animation,
-                     std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+        std::string also = animation;
+        for (const std::string& o : {gltf, viewer})
+          if (!o.empty()) also += (also.empty() ? "" : ", ") + o;
+        if (pictures) {
+          spdlog::info("wrote {} picture{} ({}{}) in {:.2f} s", written.size(), written.size() == 1 ? "" : "s",
+                       written.size() == 1 ? written.front().string() : output, also.empty() ? "" : ", " + also,
+                       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+        } else {
+          spdlog::info("wrote {} in {:.2f} s", also, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+        }
       });
 }

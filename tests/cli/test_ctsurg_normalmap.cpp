@@ -1,19 +1,23 @@
 // ctsurg-normalmap as a user runs it: a ridged ball as an occupancy grid (2 mm cells, tissue mask at
 // 1 mm), its surface from ctsurg-surface, then the normal map tool's .h5 / .png / .glb / .gltf
 // outputs (glTF: valid by the Khronos validator, in glTF's frame with rotated normals and tangents),
-// determinism and bad-input handling (exit 2, a message naming the problem, no file left).
+// --detail (anti-aliased mask by default, Gaussian on request), determinism and bad-input handling
+// (exit 2, a message naming the problem, no file left).
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <numbers>
 #include <sstream>
 
 #include "ctsurg/core/hu_volume_file.h"
 #include "ctsurg/core/occupancy_grid_file.h"
 #include "ctsurg/core/provenance.h"
 #include "ctsurg/core/surface_mesh_file.h"
+#include "ctsurg/mesh/normal_map_baking.h"
 #include "ctsurg/mesh/normal_map_png.h"
 #include "gltf_checks.h"
 #include "test_support.h"
@@ -141,6 +145,7 @@ TEST(CtsurgNormalmap, WritesSurfacePngAndGlbWithTheNormalTexture) {
                                                "--png", (dir / "nm.png").string(), "--mesh", (dir / "nm.glb").string()});
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("charts"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("anti-aliased"), std::string::npos) << r.output;  // the default detail field
   const auto coarse = ctsurg::read_surface_mesh_file(in.surface);
   const auto m = ctsurg::read_surface_mesh_file(dir / "nm.h5");
   EXPECT_EQ(m.triangle_count(), coarse.triangle_count());
@@ -215,6 +220,80 @@ TEST(CtsurgNormalmap, RerunIsByteIdentical) {
   EXPECT_TRUE(read_bytes(dir / "b.png") == png);
 }
 
+// --detail: the anti-aliased mask by default, the Gaussian-smoothed one on request (the old
+// default); the default map is the closer one to the ridged ball's analytic normals.
+TEST(CtsurgNormalmap, DetailOptionChoosesTheMasksField) {
+  TempDir dir;
+  const Outputs in = prepare(dir);
+  const auto run = [&](const std::string& name, std::vector<std::string> extra) {
+    std::vector<std::string> args = {in.surface.string(), in.grid.string(), (dir / (name + ".h5")).string(), "--size", "256",
+                                     "--png", (dir / (name + ".png")).string()};
+    args.insert(args.end(), extra.begin(), extra.end());
+    const auto r = run_tool("ctsurg-normalmap", args);
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    return r.output;
+  };
+  const std::string by_default = run("default", {}), antialias = run("antialias", {"--detail", "antialias"}),
+                    gaussian = run("gaussian", {"--detail", "gaussian"});
+  EXPECT_NE(by_default.find("anti-aliased"), std::string::npos) << by_default;
+  EXPECT_NE(gaussian.find("Gaussian sigma 1 mm"), std::string::npos) << gaussian;
+  EXPECT_TRUE(read_bytes(dir / "default.png") == read_bytes(dir / "antialias.png"));
+  const auto decode = [&](const std::string& name) {
+    const std::string png = read_bytes(dir / (name + ".png"));
+    return ctsurg::decode_normal_map_png(std::vector<uint8_t>(png.begin(), png.end()), name);
+  };
+  // Against the ridged ball's analytic normals, at every covered texel away from the poles (where
+  // the ridges meet and the surface is singular): the baked normal through the texel's interpolated
+  // frame, the truth where the radial line through the texel's point meets the ridged surface.
+  const auto m = ctsurg::read_surface_mesh_file(dir / "antialias.h5");
+  const auto owner = ctsurg::texel_owners(m.uvs, m.triangles, 256);
+  const auto error_deg = [&](const std::string& name) {
+    const auto map = decode(name);
+    double sum = 0.0;
+    int64_t count = 0;
+    for (int y = 0; y < 256; ++y)
+      for (int x = 0; x < 256; ++x) {
+        const int32_t t = owner[std::size_t(y) * 256 + std::size_t(x)];
+        if (t < 0) continue;
+        const uint32_t* v = &m.triangles[3 * std::size_t(t)];
+        Eigen::Vector2d q[3];
+        for (int c = 0; c < 3; ++c) q[c] = Eigen::Vector2d(m.uvs[2 * v[c]] * 256.0, m.uvs[2 * v[c] + 1] * 256.0);
+        const auto cross2 = [](const Eigen::Vector2d& a2, const Eigen::Vector2d& b2) { return a2.x() * b2.y() - a2.y() * b2.x(); };
+        const Eigen::Vector2d px(x + 0.5, y + 0.5);
+        const double area = cross2(q[1] - q[0], q[2] - q[0]);
+        double l[3] = {0.0, cross2(px - q[0], q[2] - q[0]) / area, cross2(q[1] - q[0], px - q[0]) / area};
+        l[0] = 1.0 - l[1] - l[2];
+        Eigen::Vector3d P = Eigen::Vector3d::Zero(), N = P, T = P;
+        double w = 0.0;
+        for (int c = 0; c < 3; ++c) {
+          const double lc = std::max(l[c], 0.0);
+          for (int k = 0; k < 3; ++k) {
+            P[k] += lc * m.vertices[3 * v[c] + k];
+            N[k] += lc * m.normals[3 * v[c] + k];
+            T[k] += lc * m.tangents[4 * v[c] + k];
+          }
+          w += lc * m.tangents[4 * v[c] + 3];
+        }
+        N.normalize();
+        T = (T - N * N.dot(T)).normalized();
+        const Eigen::Vector3d B = (w < 0 ? -1.0 : 1.0) * N.cross(T), ts = ctsurg::decode_normal_map_texel(map, x, y);
+        const Eigen::Vector3d baked = ts.x() * T + ts.y() * B + ts.z() * N, d = P.normalized();
+        if (std::abs(d.z()) > 0.7) continue;
+        const double phi = std::atan2(d.y(), d.x());
+        const Eigen::Vector3d s3 = (12.0 + 0.8 * std::cos(8.0 * phi)) * d;
+        const double rho2 = s3.x() * s3.x() + s3.y() * s3.y();
+        const Eigen::Vector3d truth = (d + 6.4 * std::sin(8.0 * phi) * Eigen::Vector3d(-s3.y(), s3.x(), 0.0) / rho2).normalized();
+        sum += std::atan2(baked.cross(truth).norm(), baked.dot(truth)) * 180.0 / std::numbers::pi;
+        ++count;
+      }
+    EXPECT_GT(count, 5000);
+    return sum / double(count);
+  };
+  const double err_aa = error_deg("antialias"), err_g = error_deg("gaussian");
+  std::printf("ridged ball, mean normal error away from the poles: antialias %.2f deg, gaussian %.2f deg\n", err_aa, err_g);
+  EXPECT_LT(err_aa, 0.8 * err_g);
+}
+
 TEST(CtsurgNormalmap, BadInputExitsTwoAndLeavesNoFile) {
   TempDir dir;
   const Outputs in = prepare(dir);
@@ -248,6 +327,9 @@ TEST(CtsurgNormalmap, BadInputExitsTwoAndLeavesNoFile) {
   // Issue 17: --sigma-mm 1e9 and --threads 1000000 crashed; outputs that are inputs replaced them;
   // a surface and a field that do not overlap were accepted.
   expect_bad({s, grid, out, "--sigma-mm", "1e9"}, "--sigma-mm");
+  expect_bad({s, grid, out, "--sigma-mm", "1e9", "--detail", "gaussian"}, "--sigma-mm");
+  expect_bad({s, grid, out, "--detail", "median", "--png", png}, "--detail");
+  expect_bad({s, (dir / "ct.h5").string(), out, "--iso", "0", "--detail", "antialias"}, "--detail");
   expect_bad({s, grid, out, "--threads", "1000000"}, "--threads");
   expect_bad({s, grid, s}, "is the input");
   expect_bad({s, grid, grid}, "is the input");

@@ -1,11 +1,15 @@
 // ctsurg-surface as a user runs it: an occupancy grid of a ball written with
 // write_occupancy_grid_file, then the tool's .h5 / .glb / .stl / .obj outputs (glTF: valid by the
 // Khronos validator, metres, +Y superior, +Z anterior, faces outward), determinism and bad-input
-// handling (exit 2, a message naming the problem, no file left behind).
+// handling (exit 2, a message naming the problem, no file left behind). The default surface is
+// smoothed (windowed sinc, volume restored), --raw keeps marching cubes' vertices, and no surface the
+// tool writes (.h5, .glb, .gltf) has a degenerate triangle (degenerate_triangles.h).
 #include "ctsurg/core/hu_volume_file.h"
 #include "ctsurg/core/occupancy_grid_file.h"
 #include "ctsurg/core/provenance.h"
 #include "ctsurg/core/surface_mesh_file.h"
+#include "ctsurg/mesh/degenerate_triangles.h"
+#include "ctsurg/mesh/gltf_material.h"
 #include "gltf_checks.h"
 #include "surface_checks.h"
 #include "test_support.h"
@@ -35,8 +39,9 @@ constexpr double kRadiusMm = 12.0, kCellMm = 2.0;
 
 using ctsurg::test::test_provenance;
 
-// A ball of radius 12 mm on 2 mm cells; fractions by 8^3 supersampling; `empty` gives all zeros.
-fs::path write_grid(const TempDir& dir, const std::string& name, bool empty = false) {
+// A ball of radius 12 mm on 2 mm cells; fractions by s^3 supersampling (s = 2: multiples of 1/8,
+// many exactly 0.5, like a grid downsampled from a mask); `empty` gives all zeros.
+fs::path write_grid(const TempDir& dir, const std::string& name, bool empty = false, int s = 8) {
   ctsurg::ImageGeometry g;
   g.dims = {18, 17, 16};
   g.spacing = Eigen::Vector3d::Constant(kCellMm);
@@ -47,7 +52,6 @@ fs::path write_grid(const TempDir& dir, const std::string& name, bool empty = fa
   grid.occupancy = ctsurg::Volume<uint8_t>(g, 0);
   grid.label = ctsurg::Volume<uint16_t>(g, 0);
   grid.mask = ctsurg::Volume<uint16_t>(g, 0);
-  constexpr int s = 8;
   for (int64_t k = 0; k < g.dims[2] && !empty; ++k)
     for (int64_t j = 0; j < g.dims[1]; ++j)
       for (int64_t i = 0; i < g.dims[0]; ++i) {
@@ -71,6 +75,37 @@ using ctsurg::test::read_bytes;
 
 bool closed_and_oriented(const ctsurg::SurfaceMesh& m) { return ctsurg::test::manifold_problem(m).empty(); }
 using ctsurg::test::enclosed_volume;
+
+// Degenerate triangles (degenerate_triangles.h) of a surface file, "" when there is none.
+std::string degenerate(const ctsurg::SurfaceMesh& m) {
+  const ctsurg::DegenerateTriangleCount n = ctsurg::count_degenerate_triangles(m, ctsurg::lattice_cell_mm(m));
+  return n.total() == 0 ? "" : n.summary();
+}
+
+// The same for a .glb/.gltf the tool wrote from a lattice of cell `cell_mm`: its POSITION and
+// indices as written (metres, after the exporter joined identical vertices, so a repeated index
+// shows here), against the cell in metres.
+std::string degenerate_gltf(const fs::path& path, double cell_mm) {
+  const auto gltf = ctsurg::test::read_gltf(path);
+  ctsurg::SurfaceMesh m;
+  m.vertices = gltf.floats(gltf.attribute("POSITION"));
+  m.triangles = gltf.indices(gltf.json.at("meshes").at(0).at("primitives").at(0).at("indices").get<std::size_t>());
+  if (m.triangles.empty()) return "no triangles";
+  const ctsurg::DegenerateTriangleCount n = ctsurg::count_degenerate_triangles(m, cell_mm / 1000.0);
+  return n.total() == 0 ? "" : n.summary();
+}
+
+// Mean angle (degrees) between the vertex normals and the direction from `centre` (LPS mm).
+double mean_normal_error_deg(const ctsurg::SurfaceMesh& m, const Eigen::Vector3d& centre) {
+  double sum = 0.0;
+  for (int64_t v = 0; v < m.vertex_count(); ++v) {
+    const auto i = static_cast<std::size_t>(v);
+    const Eigen::Vector3d n(m.normals[3 * i], m.normals[3 * i + 1], m.normals[3 * i + 2]);
+    const Eigen::Vector3d r = (ctsurg::test::vertex(m, static_cast<uint32_t>(v)) - centre).normalized();
+    sum += std::acos(std::clamp(n.normalized().dot(r), -1.0, 1.0)) * 180.0 / std::numbers::pi;
+  }
+  return sum / double(m.vertex_count());
+}
 
 // A 12^3 HU volume with a 6^3 block of 300 HU in air; `at_border` puts the block against the
 // volume's i = 0 face.
@@ -107,6 +142,64 @@ TEST(CtsurgSurface, GridToSurfaceFileIsClosedAndNearTheBall) {
   EXPECT_EQ(m.lattice.dims[0], 18);
   EXPECT_DOUBLE_EQ(m.lattice.spacing[0], kCellMm);
   EXPECT_EQ(m.grid_weights.size(), 8 * m.vertices.size() / 3);
+  EXPECT_EQ(degenerate(m), "");
+}
+
+// The default surface is smoothed (windowed sinc, 20 iterations) with marching cubes' volume kept;
+// --raw (as --smooth 0) keeps marching cubes' vertices, each on a lattice edge. Neither has a
+// degenerate triangle, in the .h5 or in the .glb, although this ball's grid has fractions exactly at
+// 0.5, so that marching cubes alone leaves coincident vertices.
+TEST(CtsurgSurface, DefaultIsSmoothedRawIsMarchingCubesAndNoneHasDegenerateTriangles) {
+  TempDir dir;
+  const fs::path grid = write_grid(dir, "g.h5", false, 2);
+  const auto smoothed = run_tool("ctsurg-surface", {grid.string(), (dir / "s.h5").string()});
+  ASSERT_EQ(smoothed.exit_code, 0) << smoothed.output;
+  EXPECT_NE(smoothed.output.find("windowed-sinc 20 iterations"), std::string::npos) << smoothed.output;
+  EXPECT_NE(smoothed.output.find("restored"), std::string::npos) << smoothed.output;
+  EXPECT_NE(smoothed.output.find("degenerate triangles: "), std::string::npos) << smoothed.output;
+  EXPECT_EQ(smoothed.output.find("degenerate triangles: 0 ("), std::string::npos) << smoothed.output;
+  const auto raw = run_tool("ctsurg-surface", {grid.string(), (dir / "r.h5").string(), "--raw"});
+  ASSERT_EQ(raw.exit_code, 0) << raw.output;
+  EXPECT_EQ(raw.output.find("smoothed"), std::string::npos) << raw.output;
+  ASSERT_EQ(run_tool("ctsurg-surface", {grid.string(), (dir / "z.h5").string(), "--smooth", "0"}).exit_code, 0);
+  ASSERT_EQ(run_tool("ctsurg-surface", {grid.string(), (dir / "t.h5").string(), "--smooth-method", "taubin"}).exit_code, 0);
+  const auto s = ctsurg::read_surface_mesh_file(dir / "s.h5"), r = ctsurg::read_surface_mesh_file(dir / "r.h5");
+  const auto z = ctsurg::read_surface_mesh_file(dir / "z.h5"), t = ctsurg::read_surface_mesh_file(dir / "t.h5");
+  EXPECT_EQ(r.vertices, z.vertices);
+  EXPECT_EQ(r.triangles, z.triangles);
+  EXPECT_EQ(s.triangles, r.triangles);  // smoothing moves vertices only
+  EXPECT_NE(s.vertices, r.vertices);
+  EXPECT_NE(t.vertices, s.vertices);
+  for (const auto* m : {&s, &r, &t}) {
+    EXPECT_TRUE(closed_and_oriented(*m));
+    EXPECT_EQ(degenerate(*m), "");
+  }
+  // Raw vertices sit on lattice edges (two integer index coordinates); smoothed ones mostly do not.
+  const auto on_edges = [](const ctsurg::SurfaceMesh& m) {
+    int64_t n = 0;
+    for (int64_t v = 0; v < m.vertex_count(); ++v) {
+      const Eigen::Vector3d ijk = m.lattice.world_to_index(ctsurg::test::vertex(m, static_cast<uint32_t>(v)));
+      int integer = 0;
+      for (int a = 0; a < 3; ++a) integer += std::abs(ijk[a] - std::round(ijk[a])) < 1e-4;
+      n += integer >= 2;
+    }
+    return double(n) / double(m.vertex_count());
+  };
+  EXPECT_EQ(on_edges(r), 1.0);
+  EXPECT_LT(on_edges(s), 0.1);
+  // The volume is marching cubes' (restored after smoothing), the normals closer to the ball's.
+  EXPECT_NEAR(enclosed_volume(s) / enclosed_volume(r), 1.0, 1e-6);
+  EXPECT_NEAR(enclosed_volume(t) / enclosed_volume(r), 1.0, 1e-6);
+  const Eigen::Vector3d centre = r.lattice.index_to_world(Eigen::Vector3d(8.4, 8.1, 7.6));
+  EXPECT_LT(mean_normal_error_deg(s, centre), 0.7 * mean_normal_error_deg(r, centre));
+  // The glTF files the same way, as written (Assimp joins identical vertices).
+  for (const std::string name : {"s.glb", "r.glb", "s.gltf"}) {
+    std::vector<std::string> args = {grid.string(), (dir / name).string()};
+    if (name[0] == 'r') args.push_back("--raw");
+    ASSERT_EQ(run_tool("ctsurg-surface", args).exit_code, 0) << name;
+    EXPECT_EQ(degenerate_gltf(dir / name, kCellMm), "") << name;
+  }
+  EXPECT_TRUE(ctsurg::test::gltf_validates({dir / "s.glb", dir / "r.glb", dir / "s.gltf"}));
 }
 
 TEST(CtsurgSurface, ExportsGlbStlObjPly) {
@@ -118,6 +211,8 @@ TEST(CtsurgSurface, ExportsGlbStlObjPly) {
     ASSERT_GT(fs::file_size(dir / name), 1000u) << name;
   }
   EXPECT_EQ(read_bytes(dir / "s.glb").substr(0, 4), "glTF");
+  EXPECT_EQ(degenerate_gltf(dir / "s.glb", kCellMm), "");
+  EXPECT_EQ(degenerate_gltf(dir / "s.gltf", kCellMm), "");
   EXPECT_TRUE(fs::exists(dir / "s.bin"));
   EXPECT_NE(read_bytes(dir / "s.gltf").find("\"s.bin\""), std::string::npos);
   EXPECT_FALSE(fs::exists(dir / "s.mtl"));
@@ -127,6 +222,13 @@ TEST(CtsurgSurface, ExportsGlbStlObjPly) {
     EXPECT_FALSE(j.contains("extensionsUsed")) << name << ": " << j.dump();
     EXPECT_FALSE(j.contains("extensionsRequired")) << name;
     EXPECT_EQ(j.dump().find("\"extensions\""), std::string::npos) << name << ": " << j.dump();
+    // The tissue material (gltf_material.h) even without a normal map; glTF's base colour is linear.
+    const auto& m = j.at("materials").at(0);
+    EXPECT_EQ(m.at("name"), "tissue") << name;
+    const auto& base = m.at("pbrMetallicRoughness").at("baseColorFactor");
+    for (int c = 0; c < 3; ++c)
+      EXPECT_NEAR(base.at(c).get<double>(), ctsurg::srgb_to_linear(ctsurg::kGltfTissueOnScreen[c]), 1e-6) << name;
+    EXPECT_NEAR(m.at("pbrMetallicRoughness").at("roughnessFactor").get<double>(), ctsurg::kGltfTissueRoughness, 1e-6) << name;
   }
   const std::string stl = read_bytes(dir / "s.stl");
   ASSERT_GT(stl.size(), 84u);
@@ -139,7 +241,8 @@ TEST(CtsurgSurface, ExportsGlbStlObjPly) {
 // glTF is metres with +X the patient's left, +Y superior, +Z anterior (docs/formats.md): a box of
 // HU 300 in air at a known LPS place, of a different size along each axis (20, 10, 5 voxels of 1 mm),
 // lands with POSITION min/max on the rotated, scaled box. The iso -350 is halfway between the two
-// HU values, so each face is half a voxel outside the centres of the box's outer voxels.
+// HU values, so each face is half a voxel outside the centres of the box's outer voxels (--raw:
+// smoothing would round the box's edges).
 TEST(CtsurgSurface, GltfIsInMetresWithSuperiorUpAndAnteriorToTheFront) {
   TempDir dir;
   ctsurg::HuVolume v;
@@ -157,7 +260,7 @@ TEST(CtsurgSurface, GltfIsInMetresWithSuperiorUpAndAnteriorToTheFront) {
   const double lo[3] = {lo_lps[0] / 1000, lo_lps[2] / 1000, -hi_lps[1] / 1000};
   const double hi[3] = {hi_lps[0] / 1000, hi_lps[2] / 1000, -lo_lps[1] / 1000};
   for (const std::string name : {"box.glb", "box.gltf"}) {
-    const auto r = run_tool("ctsurg-surface", {(dir / "ct.h5").string(), (dir / name).string(), "--iso", "-350"});
+    const auto r = run_tool("ctsurg-surface", {(dir / "ct.h5").string(), (dir / name).string(), "--iso", "-350", "--raw"});
     ASSERT_EQ(r.exit_code, 0) << name << ": " << r.output;
     const auto gltf = ctsurg::test::read_gltf(dir / name);
     const auto& position = gltf.json.at("accessors").at(gltf.attribute("POSITION"));
@@ -267,6 +370,8 @@ TEST(CtsurgSurface, RerunIsByteIdentical) {
   const auto a = ctsurg::read_surface_mesh_file(dir / "s.h5"), b = ctsurg::read_surface_mesh_file(dir / "t.h5");
   EXPECT_EQ(a.vertices, b.vertices);
   EXPECT_EQ(a.triangles, b.triangles);
+  EXPECT_EQ(a.normals, b.normals);  // smoothed, volume restored, cleaned, tied: all thread-independent
+  EXPECT_EQ(a.grid_weights, b.grid_weights);
   ASSERT_EQ(run_tool("ctsurg-surface", args).exit_code, 0);
   EXPECT_TRUE(read_bytes(dir / "s.h5") == h5);
   EXPECT_TRUE(read_bytes(dir / "s.xdmf") == xdmf);
@@ -321,6 +426,7 @@ TEST(CtsurgSurface, SmoothedAndDecimatedSurfaceStaysClosedAndTied) {
   const auto full = ctsurg::read_surface_mesh_file(dir / "full.h5");
   const auto m = ctsurg::read_surface_mesh_file(dir / "s.h5");
   EXPECT_TRUE(closed_and_oriented(m));
+  EXPECT_EQ(degenerate(m), "");
   EXPECT_LE(m.triangle_count(), 402);
   EXPECT_LT(m.triangle_count(), full.triangle_count() / 2);
   const double ball = 4.0 / 3.0 * std::numbers::pi * std::pow(kRadiusMm, 3);
@@ -355,6 +461,12 @@ TEST(CtsurgSurface, BadInputExitsTwoAndLeavesNoFile) {
   expect_bad({grid.string(), (dir / "s.h5").string(), "--iso", "nan"}, "--iso");
   expect_bad({grid.string(), (dir / "s.h5").string(), "--decimate", "2"}, "--decimate");
   expect_bad({grid.string(), (dir / "s.h5").string(), "--smooth", "-1"}, "--smooth");
+  expect_bad({grid.string(), (dir / "s.h5").string(), "--smooth", "1001"}, "--smooth");
+  expect_bad({grid.string(), (dir / "s.h5").string(), "--smooth-method", "laplace"}, "--smooth-method");
+  expect_bad({grid.string(), (dir / "s.h5").string(), "--pass-band", "2"}, "--pass-band");
+  expect_bad({grid.string(), (dir / "s.h5").string(), "--pass-band", "0"}, "--pass-band");
+  expect_bad({grid.string(), (dir / "s.h5").string(), "--raw", "--smooth", "5"}, "--raw");
+  expect_bad({grid.string(), (dir / "s.h5").string(), "--raw", "--smooth-method", "taubin"}, "--raw");
   // Issue 17: --threads 1000000 crashed; an output that is the input replaced it.
   expect_bad({grid.string(), (dir / "s.h5").string(), "--threads", "1000000"}, "--threads");
   expect_bad({grid.string(), grid.string()}, "is the input");

@@ -9,7 +9,7 @@ rm -rf "$WORK" && mkdir -p "$WORK/patients"
 for p in springs fem rendered explicit; do phantom_ct "$WORK/patients/$p"; done
 scenario "$WORK/patients/springs/scenarios/springs.yaml" spring_grid surface.h5 no
 scenario "$WORK/patients/fem/scenarios/fem.yaml" fem "" no
-scenario "$WORK/patients/rendered/scenarios/rendered.yaml" spring_grid surface_textured.h5 yes
+scenario "$WORK/patients/rendered/scenarios/rendered.yaml" spring_grid surface_textured.h5 viewer
 scenario "$WORK/patients/explicit/scenarios/explicit.yaml" explicit_springs "" no
 
 plan() { # plan PATIENT: the tools a dry run of that patient would run, one per line
@@ -37,6 +37,8 @@ expect explicit "ctsurg-import ctsurg-grid ctsurg-sim results.sh"
 # Only the requested outputs: the rendered scene's one picture, the right file names.
 grep -q -- "-o $WORK/out/rendered/rendered_picture.png" "$WORK/rendered.plan" || fail "rendered: picture target"
 grep -q -- "--surface $WORK/out/rendered/surface_textured.h5" "$WORK/rendered.plan" || fail "rendered: textured surface"
+grep -q -- "--frames all --gltf $WORK/out/rendered/rendered_3d.glb --viewer $WORK/out/rendered/rendered_3d.html" \
+  "$WORK/rendered.plan" || fail "rendered: the viewer's glTF and page"
 grep -q -- "--tetmesh $WORK/out/fem/tetmesh.h5" "$WORK/fem.plan" || fail "fem: tet mesh passed to ctsurg-sim"
 if grep -q -- "--grid" "$WORK/fem.plan"; then fail "fem: ctsurg-sim was given a grid"; fi
 # The fragments are atomic and regenerated only from the scenario and the tool.

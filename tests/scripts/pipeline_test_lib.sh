@@ -15,7 +15,8 @@ phantom_ct() {
 }
 
 # scenario FILE KIND SURFACE RENDER: a short grab scenario. KIND spring_grid | fem | explicit_springs;
-# SURFACE a stage output name or "" (none); RENDER "yes" adds one picture.
+# SURFACE a stage output name or "" (none); RENDER "yes" adds one picture, "viewer" also the animated
+# glTF and its HTML page.
 scenario() {
   local file=$1 kind=$2 surface=$3 render=$4 stem
   stem=$(basename "${file%.yaml}")
@@ -46,9 +47,11 @@ scenario() {
     echo "        - {t: 0.05, offset_mm: [0, 0, 2]}"
     echo "time: {duration_s: 0.1, dt_s: auto}"
     echo "output: {trajectory: $stem.h5, frame_interval_s: 0.05}"
-    if [[ $render == yes ]]; then
+    if [[ $render == yes || $render == viewer ]]; then
       echo "render:"
       echo "  - {name: ${stem}_picture, layout: heat-map, frames: last, size: 64}"
     fi
+    [[ $render == viewer ]] && echo "  - {name: ${stem}_3d, layout: viewer}"
+    true
   } > "$file"
 }

@@ -35,6 +35,17 @@ inline ::testing::AssertionResult gltf_validates(const std::vector<std::filesyst
   return ::testing::AssertionSuccess() << r.output;
 }
 
+// As gltf_validates, and also no warnings in any of `files` (infos and hints allowed).
+inline ::testing::AssertionResult gltf_validates_cleanly(const std::vector<std::filesystem::path>& files) {
+  const ::testing::AssertionResult r = gltf_validates(files);
+  if (!r) return r;
+  const std::string report = r.message();
+  std::size_t clean = 0;
+  for (std::size_t at = report.find(" 0 errors, 0 warnings,"); at != std::string::npos; at = report.find(" 0 errors, 0 warnings,", at + 1)) ++clean;
+  if (clean != files.size()) return ::testing::AssertionFailure() << "warnings from the glTF validator: " << report;
+  return ::testing::AssertionSuccess();
+}
+
 // A glTF file read back: its JSON and its one binary buffer (the GLB's BIN chunk, or buffers[0]'s
 // file beside a .gltf).
 struct GltfFile {

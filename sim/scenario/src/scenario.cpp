@@ -528,8 +528,13 @@ static Scenario parse_fields(const std::string& text, const fs::path& file, cons
       for (const auto& other : s.render) {
         if (other.name == r.name) item.child("name").fail("'" + r.name + "' is used twice");
       }
-      if (item.has("layout")) r.layout = item.child("layout").one_of({"single", "side-by-side", "overlay", "heat-map"});
+      if (item.has("layout")) r.layout = item.child("layout").one_of({"single", "side-by-side", "overlay", "heat-map", "viewer"});
       if (item.has("frames")) r.frames = item.child("frames").text();
+      if (r.layout == "viewer") {
+        // An animated glTF and its HTML page: every frame unless told otherwise; no comparison.
+        if (!item.has("frames")) r.frames = "all";
+        if (item.has("reference")) item.child("reference").fail("a viewer plays one model: no reference");
+      }
       if (item.has("view")) r.view = item.child("view").text();
       if (item.has("size")) r.size = static_cast<int>(item.child("size").integer(16, 8192));
       if (item.has("reference")) r.reference = item.child("reference").text();

@@ -325,6 +325,13 @@ TEST(Scenario, RenderRequestsAreChecked) {
   EXPECT_NE(error_of(base + "  - {name: a}\n").find("render[1].name: 'a' is used twice"), std::string::npos);
   EXPECT_NE(error_of(base + "  - {name: a/b}\n").find("render[1].name: use letters"), std::string::npos);
   EXPECT_NE(error_of(base + "  - {name: b, layout: mosaic}\n").find("render[1].layout: 'mosaic' is not one of"), std::string::npos);
+  // A viewer (animated glTF + HTML page) plays every frame unless told otherwise, and compares nothing.
+  const auto v = parse_scenario(base + "  - {name: b, layout: viewer}\n  - {name: c, layout: viewer, frames: \"0:10:2\"}\n",
+                                "s.yaml", "/base");
+  EXPECT_EQ(v.render[1].frames, "all");
+  EXPECT_EQ(v.render[2].frames, "0:10:2");
+  EXPECT_NE(error_of(base + "  - {name: b, layout: viewer, reference: rest}\n").find("render[1].reference: a viewer plays one model"),
+            std::string::npos);
 }
 
 // A fuzz finding (tests/fuzz_regressions/README.md): a map with a list as a key made yaml-cpp's

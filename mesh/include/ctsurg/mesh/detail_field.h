@@ -1,6 +1,8 @@
 // The full-resolution field a normal map takes its detail from: a scalar volume whose level set
-// {f = iso} is the detailed organ surface (inside = f >= iso), smoothed by a Gaussian so that its
-// gradient, the surface normal, does not show the voxel staircase of a label mask.
+// {f = iso} is the detailed organ surface (inside = f >= iso), smooth enough that its gradient, the
+// surface normal, does not show the voxel staircase of a label mask: for a mask the anti-aliased
+// mask (anti_aliased_mask.h: smooth, yet every voxel on its side), or a Gaussian-smoothed indicator;
+// for a CT its Gaussian-smoothed values.
 //
 // Sampling is trilinear on the voxel-centre lattice (clamped to the lattice at its border). The
 // gradient is the trilinear interpolation of central-difference gradients at the 8 surrounding
@@ -12,6 +14,7 @@
 #include <cstdint>
 
 #include "ctsurg/core/volume.h"
+#include "ctsurg/mesh/anti_aliased_mask.h"
 
 namespace ctsurg {
 
@@ -30,6 +33,9 @@ Volume<float> gaussian_smoothed(const Volume<float>& field, double sigma_mm, int
 // The indicator of the tissue (label != 0) of a label mask (full-resolution lattice), smoothed with
 // sigma_mm; iso 0.5.
 DetailField detail_field_from_labels(const Volume<uint16_t>& labels, double sigma_mm, int threads = 0);
+// The anti-aliased mask of the tissue (label != 0), in mm, iso 0 (anti_aliased_mask.h).
+DetailField detail_field_from_anti_aliased_labels(const Volume<uint16_t>& labels, const AntiAliasOptions& options = {},
+                                                  AntiAliasStats* stats = nullptr);
 // A scalar field (e.g. HU) smoothed with sigma_mm, surface at iso (same units as the field).
 DetailField detail_field_from_values(const Volume<float>& values, double iso, double sigma_mm, int threads = 0);
 

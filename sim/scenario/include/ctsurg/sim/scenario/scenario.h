@@ -95,8 +95,9 @@ struct ToolAction {
 // only checks and lists them (ctsurg-sim --describe).
 struct RenderRequest {
   std::string name;                 // the picture's file stem, e.g. "grab_heat" -> grab_heat.png ([A-Za-z0-9_-]+)
-  std::string layout = "single";    // single | side-by-side | overlay | heat-map
-  std::string frames = "last";      // ctsurg-render --frames: rest, last, all, N, A:B, A:B:STEP
+  std::string layout = "single";    // single | side-by-side | overlay | heat-map | viewer (NAME.glb + NAME.html:
+                                    // ctsurg-render --gltf --viewer, the frames animated; no reference)
+  std::string frames = "last";      // ctsurg-render --frames: rest, last, all, N, A:B, A:B:STEP (viewer: default all)
   std::string view = "anterior";    // anterior, posterior, left, right, superior, inferior, or "AZ,EL"
   int size = 768;                   // pixels (square)
   std::string reference;            // comparisons: empty = the rest surface, or another scenario's name
