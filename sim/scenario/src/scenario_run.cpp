@@ -52,89 +52,39 @@ bool check_budget(const Scenario& s, const SimulationEngine& engine, const RunBu
                        ": shorten duration_s, coarsen the model or the step, or run it anyway with --force");
 }
 
+std::unique_ptr<SimulationEngine> engine_of(std::unique_ptr<SimulationEngine> engine, const Scenario& s) {
+  if (!engine) throw RuntimeError(s.file.string() + ": no engine to run");
+  return engine;
+}
+
 // The loop (scenario_run.h); report already holds the notes of the engine's construction.
 Trajectory run(const Scenario& s, ScenarioEngine built, RunReport& report, const std::function<void(double)>& progress,
                const RunBudget& budget) {
-  if (!built.engine) throw RuntimeError(s.file.string() + ": no engine to run");
-  const std::string sfile = s.file.string();
-  const auto note = [&](const std::string& text) { report.notes.push_back(text); };
-  SimulationEngine& engine = *built.engine;
-  ToolTimeline timeline(s.tools, engine.rest_positions(), engine.origin(), note, sfile);
   const int64_t frame_count = static_cast<int64_t>(std::floor(s.duration_s / s.frame_interval_s + 1e-9)) + 1;
-  TrajectoryRecorder recorder(s, engine, timeline, std::move(built.surface_lps_vertices), frame_count);
+  ScenarioLoop loop(s, std::move(built), frame_count, [&](const std::string& text) { report.notes.push_back(text); });
+  const auto start = std::chrono::steady_clock::now();
+  SimulationEngine& engine = loop.engine();
   const EngineCounts counts = engine.counts();
   report.particles = counts.nodes;
   report.fixed = counts.fixed;
   report.springs = counts.springs;
   report.elements = counts.elements;
   report.critical_dt_s = counts.critical_dt_s;
-
-  const auto start = std::chrono::steady_clock::now();
-  engine.sync();
-  recorder.record(engine, timeline, 0.0);
   report.frame_wall_s.assign(1, 0.0);
-  // The last frame, for restarts with half the step; kept only when the run may restart.
-  const bool restartable = s.max_step_halvings > 0 && engine.can_restart();
-  ToolTimeline checkpoint_timeline = timeline;
-  size_t checkpoint_frames = recorder.frames();
-  if (restartable) engine.save_checkpoint();
-  int halvings = 0;
   double last_progress = -1;
-  std::vector<ToolInput> tools;
-  int64_t next_frame = 1;
   bool estimated = budget.max_wall_s <= 0;
   int64_t iterations = 0;
-  while (next_frame < frame_count) {
+  while (loop.next_frame() < frame_count) {
     if (!estimated && ++iterations % 16 == 0) {
       estimated = check_budget(s, engine, budget, std::chrono::steady_clock::now() - start);
     }
-    // Advance to the next event: one step (several while no tool acts, for an engine that batches them),
-    // or a quasi-static engine's equilibrium at the next frame.
-    const double t_frame = static_cast<double>(next_frame) * s.frame_interval_s;
-    StabilityReport check;
-    if (engine.quasi_static()) {
-      timeline.inputs(engine.time(), t_frame, engine.blade_sweep_mm(), tools);
-      engine.equilibrium(tools, t_frame);
-    } else {
-      const double t = engine.time(), dt = engine.dt(), t_next = t + dt;
-      timeline.inputs(t, t_next, engine.blade_sweep_mm(), tools);
-      const int steps = engine.batches_steps() && timeline.idle(t_next, t_frame)
-                            ? static_cast<int>(std::clamp(std::floor((t_frame - t) / dt + 0.5), 1.0, 1e6))
-                            : 1;
-      check = engine.step(tools, steps);
+    const ScenarioLoop::Event event = loop.advance();
+    if (!event.unstable.stable) {
+      throw RuntimeError(s.file.string() + ": the run became unstable: " + loop.unstable_message(event.unstable));
     }
-    const bool frame_due = engine.quasi_static() || engine.time() >= t_frame - 0.5 * engine.dt();
-    if (check.stable && (frame_due || engine.steps() % kGuardInterval == 0)) check = engine.check_stability();
-    if (!check.stable) {
-      if (!restartable || halvings >= s.max_step_halvings) {
-        std::string hint;
-        if (engine.can_restart()) {
-          hint = s.max_step_halvings > 0 ? " (after " + std::to_string(halvings) + " step halvings)"
-                                         : " Set time.dt_s lower, or allow time.max_step_halvings.";
-        }
-        throw RuntimeError(sfile + ": the run became unstable: " + check.message + hint);
-      }
-      // Restart from the last frame with half the step.
-      engine.restart_halved();
-      timeline = checkpoint_timeline;
-      recorder.truncate(checkpoint_frames);
-      report.frame_wall_s.resize(checkpoint_frames);
-      next_frame = static_cast<int64_t>(checkpoint_frames);
-      ++halvings;
-      note("unstable at t = " + std::to_string(check.time) + " s: restarted from t = " + std::to_string(engine.time()) +
-           " s with dt = " + std::to_string(engine.dt()) + " s (" + check.message + ")");
-      continue;
-    }
-    if (frame_due) {
-      engine.sync();
-      recorder.record(engine, timeline, engine.time());
+    if (event.restarted) report.frame_wall_s.resize(loop.recorder().frames());
+    if (event.recorded) {
       report.frame_wall_s.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
-      ++next_frame;
-      if (restartable) {
-        engine.save_checkpoint();
-        checkpoint_timeline = timeline;
-        checkpoint_frames = recorder.frames();
-      }
       const double fraction = engine.time() / s.duration_s;
       if (progress && fraction - last_progress >= 0.01) {
         progress(fraction);
@@ -145,15 +95,99 @@ Trajectory run(const Scenario& s, ScenarioEngine built, RunReport& report, const
   const EngineMetrics end = engine.metrics();
   report.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   report.dt_s = engine.dt();
-  report.halvings = halvings;
+  report.halvings = loop.halvings();
   report.steps = engine.steps();
   report.springs_cut = end.springs_cut;
   report.surface_triangles_removed = end.triangles_removed;
   if (progress) progress(1.0);
-  return recorder.finish(engine.dt());
+  return loop.recorder().finish(engine.dt());
 }
 
 }  // namespace
+
+ScenarioLoop::ScenarioLoop(const Scenario& s, ScenarioEngine built, int64_t frames,
+                           const std::function<void(const std::string&)>& note)
+    : s_(s),
+      engine_(engine_of(std::move(built.engine), s)),
+      note_(note),
+      timeline_(s.tools, engine_->rest_positions(), engine_->origin(), note, s.file.string()),
+      recorder_(s, *engine_, timeline_, std::move(built.surface_lps_vertices), frames),
+      checkpoint_timeline_(timeline_) {
+  engine_->sync();
+  recorder_.record(*engine_, timeline_, 0.0);
+  // The last frame, for restarts with half the step; kept only when the run may restart.
+  restartable_ = s.max_step_halvings > 0 && engine_->can_restart();
+  checkpoint_frames_ = recorder_.frames();
+  if (restartable_) engine_->save_checkpoint();
+}
+
+double ScenarioLoop::next_time() const {
+  const SimulationEngine& engine = *engine_;
+  return engine.quasi_static() ? static_cast<double>(next_frame_) * s_.frame_interval_s : engine.time() + engine.dt();
+}
+
+std::string ScenarioLoop::unstable_message(const StabilityReport& unstable) const {
+  std::string hint;
+  if (engine_->can_restart()) {
+    hint = s_.max_step_halvings > 0 ? " (after " + std::to_string(halvings_) + " step halvings)"
+                                    : " Set time.dt_s lower, or allow time.max_step_halvings.";
+  }
+  return unstable.message + hint;
+}
+
+ScenarioLoop::Event ScenarioLoop::advance() {
+  SimulationEngine& engine = *engine_;
+  Event event;
+  // Advance to the next event: one step (several while no tool acts, for an engine that batches them),
+  // or a quasi-static engine's equilibrium at the next frame.
+  const double t_frame = static_cast<double>(next_frame_) * s_.frame_interval_s;
+  StabilityReport check;
+  if (engine.quasi_static()) {
+    timeline_.inputs(engine.time(), t_frame, engine.blade_sweep_mm(), tools_);
+    engine.equilibrium(tools_, t_frame);
+  } else {
+    const double t = engine.time(), dt = engine.dt(), t_next = t + dt;
+    timeline_.inputs(t, t_next, engine.blade_sweep_mm(), tools_);
+    const int steps = engine.batches_steps() && timeline_.idle(t_next, t_frame)
+                          ? static_cast<int>(std::clamp(std::floor((t_frame - t) / dt + 0.5), 1.0, 1e6))
+                          : 1;
+    check = engine.step(tools_, steps);
+  }
+  const bool frame_due = engine.quasi_static() || engine.time() >= t_frame - 0.5 * engine.dt();
+  if (check.stable && (frame_due || engine.steps() % kGuardInterval == 0)) check = engine.check_stability();
+  if (!check.stable) {
+    if (!restartable_ || halvings_ >= s_.max_step_halvings) {
+      event.unstable = check;
+      return event;
+    }
+    // Restart from the last frame with half the step. The timeline goes back to its blades' sweep
+    // state then; its tools and keyframes stay (a live session's, added since, are in its future).
+    engine.restart_halved();
+    timeline_.restore_sweeps(checkpoint_timeline_);
+    recorder_.truncate(checkpoint_frames_);
+    next_frame_ = static_cast<int64_t>(checkpoint_frames_);
+    ++halvings_;
+    if (note_) {
+      note_("unstable at t = " + std::to_string(check.time) + " s: restarted from t = " + std::to_string(engine.time()) +
+            " s with dt = " + std::to_string(engine.dt()) + " s (" + check.message + ")");
+    }
+    event.restarted = true;
+    event.restart = check;
+    return event;
+  }
+  if (frame_due) {
+    engine.sync();
+    recorder_.record(engine, timeline_, engine.time());
+    ++next_frame_;
+    if (restartable_) {
+      engine.save_checkpoint();
+      checkpoint_timeline_ = timeline_;
+      checkpoint_frames_ = recorder_.frames();
+    }
+    event.recorded = true;
+  }
+  return event;
+}
 
 Trajectory run_scenario(const Scenario& s, RunReport* report_out, const std::function<void(double)>& progress,
                         const RunBudget& budget) {

@@ -172,6 +172,62 @@ void ToolTimeline::inputs(double t0, double t1, double min_sweep_mm, std::vector
   }
 }
 
+size_t ToolTimeline::add_tool(const ToolAction& spec, const Vec3& origin, const std::string& where) {
+  if (spec.kind != ToolKind::grab && spec.kind != ToolKind::probe && spec.kind != ToolKind::cut) {
+    throw InputError(where, spec.label, std::string(to_string(spec.kind)) + " cannot be added while running (grab, probe and cut can)");
+  }
+  if (spec.path.empty() || spec.snap_to_tissue) throw InputError(where, spec.label, "needs a first keyframe and no snap_to_tissue");
+  if (!(spec.end_s > spec.start_s)) throw InputError(where, spec.label, "its window must end after it starts");
+  Tool tool;
+  tool.spec = spec;
+  tool.spec.path.clear();
+  tools_.push_back(std::move(tool));
+  const size_t i = tools_.size() - 1;
+  for (const Keyframe& k : spec.path) {
+    if (k.point.kind != PointSpec::Kind::position_mm || k.rotation) {
+      tools_.pop_back();
+      throw InputError(where, spec.label, "keyframes added while running are LPS positions without a rotation");
+    }
+    add_keyframe(i, k.t, k.point.value, origin);
+  }
+  return i;
+}
+
+void ToolTimeline::add_keyframe(size_t i, double t, const std::array<double, 3>& lps, const Vec3& origin) {
+  Tool& tool = tools_.at(i);
+  Path& r = tool.path;
+  if (!r.t.empty() && t < r.t.back()) {
+    throw RuntimeError("tool timeline: " + tool.spec.label + ": keyframe at t = " + std::to_string(t) + " s before its last");
+  }
+  if (!r.t.empty() && t == r.t.back()) {
+    r.t.pop_back();
+    r.p.pop_back();
+    r.r.pop_back();
+    tool.spec.path.pop_back();
+  }
+  r.t.push_back(t);
+  r.p.push_back(local(lps, origin));
+  r.r.push_back(kIdentityRotation);
+  Keyframe k;
+  k.t = t;
+  k.point = {PointSpec::Kind::position_mm, lps};
+  tool.spec.path.push_back(k);
+}
+
+void ToolTimeline::set_end(size_t i, double end_s) {
+  Tool& tool = tools_.at(i);
+  if (!(end_s > tool.spec.start_s)) {
+    throw RuntimeError("tool timeline: " + tool.spec.label + ": window would end at " + std::to_string(end_s) + " s, not after its start");
+  }
+  tool.spec.end_s = end_s;
+}
+
+void ToolTimeline::restore_sweeps(const ToolTimeline& checkpoint) {
+  for (size_t i = 0; i < tools_.size(); ++i) {
+    tools_[i].cut_from = i < checkpoint.tools_.size() ? checkpoint.tools_[i].cut_from : std::nullopt;
+  }
+}
+
 void ToolTimeline::sweeps(Tool& tool, double t0, double t1, double min_sweep_mm, std::vector<std::array<Vec3, 2>>& out) const {
   const ToolAction& spec = tool.spec;
   if (!tool.cut_from && t1 >= spec.start_s - kWindowTolerance && t1 < spec.end_s) tool.cut_from = std::max(spec.start_s, t0);

@@ -15,7 +15,7 @@ namespace ctsurg::sim {
 
 TrajectoryRecorder::TrajectoryRecorder(const Scenario& s, const SimulationEngine& engine, const ToolTimeline& timeline,
                                        std::vector<float> surface_lps_vertices, int64_t frames)
-    : origin_(engine.origin()), write_particles_(s.write_particles) {
+    : origin_(engine.origin()), write_particles_(s.write_particles), tools_(timeline.size()) {
   const std::vector<double>& rest = engine.rest_positions();
   const int64_t np = static_cast<int64_t>(rest.size() / 3);
   const int64_t nv = engine.has_surface() ? static_cast<int64_t>(surface_lps_vertices.size() / 3) : np;
@@ -166,11 +166,57 @@ void TrajectoryRecorder::truncate(size_t frames) {
   traj_.stitches.resize(frames * stitches_ * 7);
 }
 
-Trajectory TrajectoryRecorder::finish(double dt) {
-  traj_.dt_s = dt;
-  traj_.metrics = std::move(metrics_);
+void TrajectoryRecorder::add_tool(const ToolTimeline& timeline, size_t i) {
+  if (i != tools_ || i >= timeline.size()) {
+    throw RuntimeError("trajectory recorder: tool " + std::to_string(i) + " added out of order (next: " + std::to_string(tools_) + ")");
+  }
+  const ToolAction& tool = timeline.tool(i);
+  const bool blade = tool.kind == ToolKind::cut;
+  if (!blade && tool.kind != ToolKind::grab && tool.kind != ToolKind::probe) {
+    throw RuntimeError("trajectory recorder: " + tool.label + " cannot be added while running");
+  }
+  const size_t frames = traj_.time.size(), width = blade ? 7 : 4, tools = blade ? blades_ : traj_.sphere_kinds.size();
+  std::vector<double>& data = blade ? traj_.blades : traj_.spheres;
+  std::vector<double> grown;
+  grown.reserve(frames * (tools + 1) * width);
+  for (size_t f = 0; f < frames; ++f) {
+    const double t = traj_.time[f];
+    if (timeline.active(i, t)) throw RuntimeError("trajectory recorder: " + tool.label + " was added after it started");
+    grown.insert(grown.end(), data.begin() + static_cast<std::ptrdiff_t>(f * tools * width),
+                 data.begin() + static_cast<std::ptrdiff_t>((f + 1) * tools * width));
+    const Vec3 l = timeline.position(i, t), c{l[0] + origin_[0], l[1] + origin_[1], l[2] + origin_[2]};
+    if (blade) {
+      const auto& e = tool.blade_edge_mm;
+      grown.insert(grown.end(), {c[0] - e[0] / 2, c[1] - e[1] / 2, c[2] - e[2] / 2, c[0] + e[0] / 2, c[1] + e[1] / 2, c[2] + e[2] / 2, 0.0});
+    } else {
+      grown.insert(grown.end(), {c[0], c[1], c[2], 0.0});
+    }
+  }
+  data = std::move(grown);
+  ++tools_;
+  if (blade) {
+    ++blades_;
+  } else {
+    traj_.sphere_kinds.push_back(to_string(tool.kind));
+  }
+}
+
+void TrajectoryRecorder::finish_into(Trajectory& traj, double dt) const {
+  traj.dt_s = dt;
+  traj.metrics = metrics_;
   // Only a run that closed some hole says so (older readers and runs without cuts see no dataset).
-  if (std::any_of(closing_.begin(), closing_.end(), [](int64_t n) { return n > 0; })) traj_.closing_triangles = closing_;
+  if (std::any_of(closing_.begin(), closing_.end(), [](int64_t n) { return n > 0; })) traj.closing_triangles = closing_;
+}
+
+Trajectory TrajectoryRecorder::snapshot(double dt) const {
+  Trajectory traj = traj_;
+  finish_into(traj, dt);
+  return traj;
+}
+
+Trajectory TrajectoryRecorder::finish(double dt) {
+  finish_into(traj_, dt);
+  metrics_.clear();
   return std::move(traj_);
 }
 

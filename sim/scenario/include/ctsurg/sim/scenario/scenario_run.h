@@ -20,9 +20,12 @@
 #include "ctsurg/core/trajectory_file.h"
 #include "ctsurg/sim/scenario/scenario.h"
 #include "ctsurg/sim/scenario/scenario_engine.h"
+#include "ctsurg/sim/scenario/tool_timeline.h"
+#include "ctsurg/sim/scenario/trajectory_recorder.h"
 
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -51,6 +54,63 @@ struct RunReport {
 struct RunBudget {
   double max_wall_s = 0;
   double sample_s = 1.0;
+};
+
+// The loop, one event at a time: run_scenario drives it to the scenario's last frame; a live session
+// (sim/live/live_session.h) drives it for as long as its user works, adding tools and keyframes to
+// timeline() between events (they act from next_time() on). Both therefore compute the same tool
+// inputs, batch the same steps, check stability at the same steps and record the same frames, so a
+// live session saved as a scenario replays through run_scenario to the same trajectory.
+class ScenarioLoop {
+ public:
+  // What one advance() did.
+  struct Event {
+    bool recorded = false;   // a frame was recorded
+    bool restarted = false;  // unstable: restarted from the last frame with half the step (restart says why)
+    StabilityReport restart;
+    // Unstable beyond the allowed halvings (stable == false): the loop cannot go on;
+    // unstable_message() says why, with a step to try.
+    StabilityReport unstable;
+  };
+  // built: the engine (make_scenario_engine); frames: how many frames the recorder reserves (the
+  // run's); note receives what the loop and the timeline decide (may be empty).
+  ScenarioLoop(const Scenario& scenario, ScenarioEngine built, int64_t frames,
+               const std::function<void(const std::string&)>& note = {});
+  ScenarioLoop(const ScenarioLoop&) = delete;
+  ScenarioLoop& operator=(const ScenarioLoop&) = delete;
+
+  // Advances to the next event (scenario_run.h's loop body): one step with the tools as they are at its
+  // end (several while no tool acts, for an engine that batches them), or a quasi-static engine's
+  // equilibrium at the next frame; checks stability; restarts with half the step when allowed;
+  // records the frame when one is due.
+  Event advance();
+  // The time (s) the next advance() ends its first step at (quasi-static: the next frame's time): a
+  // tool added or moved now acts from then.
+  double next_time() const;
+  int64_t next_frame() const { return next_frame_; }  // index of the next frame to record
+  int halvings() const { return halvings_; }
+  // The message for an Event's unstable report: the guard's, and what to change.
+  std::string unstable_message(const StabilityReport& unstable) const;
+
+  SimulationEngine& engine() { return *engine_; }
+  const SimulationEngine& engine() const { return *engine_; }
+  ToolTimeline& timeline() { return timeline_; }
+  const ToolTimeline& timeline() const { return timeline_; }
+  TrajectoryRecorder& recorder() { return recorder_; }
+  const TrajectoryRecorder& recorder() const { return recorder_; }
+
+ private:
+  const Scenario& s_;
+  std::unique_ptr<SimulationEngine> engine_;
+  std::function<void(const std::string&)> note_;
+  ToolTimeline timeline_;
+  TrajectoryRecorder recorder_;
+  bool restartable_ = false;
+  ToolTimeline checkpoint_timeline_;
+  size_t checkpoint_frames_ = 0;
+  int halvings_ = 0;
+  int64_t next_frame_ = 1;
+  std::vector<ToolInput> tools_;
 };
 
 // Runs `scenario`; progress(fraction of the simulated time) is called now and then (may be empty).

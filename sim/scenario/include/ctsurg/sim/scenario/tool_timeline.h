@@ -24,7 +24,14 @@
 // engine's blade_sweep_mm(): a quarter of the shortest spring, so no spring slips between two sweeps),
 // or reaches a keyframe or its end: each sweep then lies on one straight segment of the path, a planar
 // quad the engine cuts as two triangles. The sweep state is the timeline's own: a copy of the timeline
-// is its checkpoint.
+// is its checkpoint (restore_sweeps() takes only that state back).
+//
+// Growing while running (a live session, sim/live/live_session.h). add_tool() appends a grab, probe or
+// cut whose keyframes are LPS positions; add_keyframe() appends a keyframe after its last one (or
+// replaces the last one at the same time, before any step used it); set_end() closes its window. Each
+// change must lie in the future of every inputs() call made so far (keyframe times and windows after
+// the last t1): then the inputs from here on are those of a timeline that held the change from the
+// start, blade sweeps included (a sweep never crosses a keyframe, and those before t1 are unchanged).
 //
 // Units: mm, s.
 #pragma once
@@ -64,6 +71,18 @@ class ToolTimeline {
   // scenario's order, with its window and centre at t1; blades with the sweeps since their last one
   // (min_sweep_mm: the engine's blade_sweep_mm()). Advances the blades' sweep state.
   void inputs(double t0, double t1, double min_sweep_mm, std::vector<ToolInput>& out);
+
+  // Growing while running (see above). spec: kind grab, probe or cut, every keyframe a position_mm (LPS,
+  // moved into the local frame by `origin`, as the constructor does), no snap_to_tissue; InputError(where,
+  // spec.label, ...) otherwise. Returns the tool's index.
+  size_t add_tool(const ToolAction& spec, const Vec3& origin, const std::string& where = "live session");
+  // Tool i's keyframe at t (s) at `lps` (mm): after its last keyframe, or replacing the last one when t
+  // is its time. The tool's spec (tool(i).path) records it too.
+  void add_keyframe(size_t i, double t, const std::array<double, 3>& lps, const Vec3& origin);
+  void set_end(size_t i, double end_s);  // tool i's window closes at end_s (s, after its start)
+  // The blades' sweep state of `checkpoint`, an earlier copy of this timeline (a restart from it): tools
+  // added since have not swept yet.
+  void restore_sweeps(const ToolTimeline& checkpoint);
 
  private:
   struct Path {

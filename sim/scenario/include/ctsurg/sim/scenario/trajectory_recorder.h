@@ -13,6 +13,11 @@
 //
 // Positions go out in LPS: the engine's local frame plus its origin, added in double before rounding
 // to the file's float. truncate() drops the frames after a checkpoint when a run restarts.
+//
+// A tool added to the timeline while running (a live session's, ToolTimeline::add_tool) is added here
+// by add_tool(): its entries for the frames already recorded are those record() writes for a tool that
+// has not started (its first keyframe's position, not acting), so the trajectory is the one a run that
+// held the tool from the start records.
 #pragma once
 
 #include "ctsurg/core/trajectory_file.h"
@@ -38,6 +43,11 @@ class TrajectoryRecorder {
   void record(SimulationEngine& engine, const ToolTimeline& timeline, double t);
   size_t frames() const { return traj_.time.size(); }
   void truncate(size_t frames);
+  // Tool i of the timeline, added since the last record() (a grab, probe or cut that starts after the
+  // frames recorded so far), once its first keyframe is final; tools are added in the timeline's order.
+  void add_tool(const ToolTimeline& timeline, size_t i);
+  // The trajectory so far (a copy; the recorder goes on); dt: the run's step now.
+  Trajectory snapshot(double dt) const;
   // The trajectory (the recorder is spent); dt: the run's final step.
   Trajectory finish(double dt);
 
@@ -45,6 +55,8 @@ class TrajectoryRecorder {
   Trajectory traj_;
   Vec3 origin_;
   bool write_particles_;
+  void finish_into(Trajectory& traj, double dt) const;  // dt, metrics, closing triangles
+  size_t tools_ = 0;                // the timeline's tools recorded
   size_t blades_ = 0;               // cut tools
   size_t stitches_ = 0;             // the sutures' stitches
   std::vector<int64_t> closing_;    // per topology: its last triangles closing cut holes

@@ -1,0 +1,95 @@
+// The live session's wire protocol (issue 22): what a browser page sends (JSON text messages, checked
+// strictly) and what it receives (binary frames of the surface). No networking here: a server reads a
+// WebSocket text message, parse_live_message() turns it into a LiveMessage or refuses it, and
+// encode_live_frame() makes the binary message it sends back.
+//
+// Client -> server: one JSON object per message, at most limits.max_bytes bytes (4 KiB), no other key
+// than listed (positions LPS mm, finite, inside the model's rest bounding box enlarged by
+// limits.margin_mm; radii (0, 50] mm; a blade's edge (0, 200] mm long; ids 0 .. 2^20):
+//
+//   {"type": "begin", "tool": "grab" | "probe", "radius_mm": r, "position_mm": [x, y, z]}
+//   {"type": "begin", "tool": "cut", "blade_edge_mm": [x, y, z], "position_mm": [x, y, z]}
+//   {"type": "move", "id": n, "position_mm": [x, y, z]}       (n: the tool's id, in begin order from 0)
+//   {"type": "end", "id": n}
+//   {"type": "pause"} | {"type": "resume"} | {"type": "reset"} | {"type": "save"}
+//
+// Every refusal is an InputError("message", field, problem) naming the field ("position_mm[2]", "type",
+// "(text)" for what is not JSON or too long) and what is wrong; nothing a client sends makes the parser
+// crash (tests/sim/live/test_live_protocol.cpp feeds it 20,000 random and mutated messages).
+//
+// Server -> client: a binary frame, little-endian, a 48-byte header then the data:
+//
+//   offset  bytes  type     field
+//        0      4  char[4]  magic "CTLF"
+//        4      2  uint16   version, 1
+//        6      2  uint16   flags: bit 0 the triangles follow; bit 1 paused; bit 2 stopped (the guard's
+//                           message goes as a separate text message)
+//        8      8  uint64   frame number (the server's count of frames sent)
+//       16      8  float64  simulated time, s
+//       24      8  int64    engine steps
+//       32      8  uint64   topology version (LiveSession::topology_version(): changes when a cut
+//                           changes the triangles)
+//       40      4  uint32   V, the surface's vertex count
+//       44      4  uint32   F, its triangle count now (whether or not they follow)
+//       48   12 V  float32  vertex positions x, y, z (LPS mm), vertex by vertex
+//   48+12V   12 F  uint32   triangles (3 vertex indices each), only with flag bit 0: the first frame and
+//                           whenever the topology version changed since the last frame sent
+#pragma once
+
+#include "ctsurg/sim/base/simulation_engine.h"
+
+#include <array>
+#include <cstdint>
+#include <span>
+#include <string_view>
+#include <vector>
+
+namespace ctsurg::sim {
+
+class LiveSession;
+
+struct LiveMessage {
+  enum class Type { begin, move, end, pause, resume, reset, save };
+  Type type = Type::pause;
+  ToolKind tool = ToolKind::grab;            // begin: grab, probe or cut
+  double radius_mm = 0;                      // begin grab/probe
+  std::array<double, 3> blade_edge_mm{};     // begin cut
+  std::array<double, 3> position_mm{};       // begin, move: LPS mm
+  int id = -1;                               // move, end
+};
+
+struct LiveProtocolLimits {
+  std::array<double, 6> bounds{-1e4, -1e4, -1e4, 1e4, 1e4, 1e4};  // LPS mm: min xyz, max xyz (the model's rest box)
+  double margin_mm = 50;        // positions may lie this far outside bounds
+  size_t max_bytes = 4096;      // a message's size
+  int max_id = 1 << 20;
+};
+
+// Parses one client message (see above). InputError("message", field, problem) when it is refused.
+LiveMessage parse_live_message(std::string_view text, const LiveProtocolLimits& limits);
+
+struct LiveFrame {
+  static constexpr uint16_t kVersion = 1;
+  static constexpr size_t kHeaderBytes = 48;
+  enum Flags : uint16_t { triangles_follow = 1, paused = 2, stopped = 4 };
+  uint16_t flags = 0;
+  uint64_t frame = 0;
+  double time_s = 0;
+  int64_t steps = 0;
+  uint64_t topology_version = 0;
+  uint32_t triangle_count = 0;       // F
+  std::vector<float> positions;      // V x 3, LPS mm
+  std::vector<uint32_t> triangles;   // F x 3 when flags has triangles_follow, else empty
+};
+
+// The frame's bytes (layout above); triangles are written when flags has triangles_follow.
+std::vector<uint8_t> encode_live_frame(const LiveFrame& frame);
+// The frame back from its bytes: InputError("frame", field, problem) for a wrong magic or version, a
+// size that does not match the counts, or triangle indices beyond V.
+LiveFrame decode_live_frame(std::span<const uint8_t> bytes);
+
+// The session's surface now as frame number `frame`; the triangles follow when its topology version
+// differs from `sent_topology` (the version of the last frame sent; 0 for the first: versions start at 1).
+LiveFrame live_frame_of(LiveSession& session, uint64_t frame, uint64_t sent_topology);
+
+}  // namespace ctsurg::sim
