@@ -112,7 +112,7 @@ ScenarioLoop::ScenarioLoop(const Scenario& s, ScenarioEngine built, int64_t fram
       note_(note),
       timeline_(s.tools, engine_->rest_positions(), engine_->origin(), note, s.file.string()),
       recorder_(s, *engine_, timeline_, std::move(built.surface_lps_vertices), frames),
-      checkpoint_timeline_(timeline_) {
+      checkpoint_sweeps_(timeline_.sweep_state()) {
   engine_->sync();
   recorder_.record(*engine_, timeline_, 0.0);
   // The last frame, for restarts with half the step; kept only when the run may restart.
@@ -163,7 +163,7 @@ ScenarioLoop::Event ScenarioLoop::advance() {
     // Restart from the last frame with half the step. The timeline goes back to its blades' sweep
     // state then; its tools and keyframes stay (a live session's, added since, are in its future).
     engine.restart_halved();
-    timeline_.restore_sweeps(checkpoint_timeline_);
+    timeline_.restore_sweeps(checkpoint_sweeps_);
     recorder_.truncate(checkpoint_frames_);
     next_frame_ = static_cast<int64_t>(checkpoint_frames_);
     ++halvings_;
@@ -181,7 +181,7 @@ ScenarioLoop::Event ScenarioLoop::advance() {
     ++next_frame_;
     if (restartable_) {
       engine.save_checkpoint();
-      checkpoint_timeline_ = timeline_;
+      checkpoint_sweeps_ = timeline_.sweep_state();
       checkpoint_frames_ = recorder_.frames();
     }
     event.recorded = true;

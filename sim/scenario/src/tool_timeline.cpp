@@ -222,10 +222,15 @@ void ToolTimeline::set_end(size_t i, double end_s) {
   tool.spec.end_s = end_s;
 }
 
-void ToolTimeline::restore_sweeps(const ToolTimeline& checkpoint) {
-  for (size_t i = 0; i < tools_.size(); ++i) {
-    tools_[i].cut_from = i < checkpoint.tools_.size() ? checkpoint.tools_[i].cut_from : std::nullopt;
-  }
+ToolTimeline::SweepState ToolTimeline::sweep_state() const {
+  SweepState state;
+  state.reserve(tools_.size());
+  for (const Tool& tool : tools_) state.push_back(tool.cut_from);
+  return state;
+}
+
+void ToolTimeline::restore_sweeps(const SweepState& checkpoint) {
+  for (size_t i = 0; i < tools_.size(); ++i) tools_[i].cut_from = i < checkpoint.size() ? checkpoint[i] : std::nullopt;
 }
 
 void ToolTimeline::sweeps(Tool& tool, double t0, double t1, double min_sweep_mm, std::vector<std::array<Vec3, 2>>& out) const {

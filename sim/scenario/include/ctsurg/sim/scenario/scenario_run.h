@@ -106,7 +106,7 @@ class ScenarioLoop {
   ToolTimeline timeline_;
   TrajectoryRecorder recorder_;
   bool restartable_ = false;
-  ToolTimeline checkpoint_timeline_;
+  ToolTimeline::SweepState checkpoint_sweeps_;  // the blades' sweep state at the last frame
   size_t checkpoint_frames_ = 0;
   int halvings_ = 0;
   int64_t next_frame_ = 1;

@@ -23,8 +23,8 @@
 // Blades. A blade sweeps from where its last sweep ended once its centre has moved min_sweep_mm (the
 // engine's blade_sweep_mm(): a quarter of the shortest spring, so no spring slips between two sweeps),
 // or reaches a keyframe or its end: each sweep then lies on one straight segment of the path, a planar
-// quad the engine cuts as two triangles. The sweep state is the timeline's own: a copy of the timeline
-// is its checkpoint (restore_sweeps() takes only that state back).
+// quad the engine cuts as two triangles. The sweep state is the timeline's own: sweep_state() is its
+// checkpoint and restore_sweeps() takes it back.
 //
 // Growing while running (a live session, sim/live/live_session.h). add_tool() appends a grab, probe or
 // cut whose keyframes are LPS positions; add_keyframe() appends a keyframe after its last one (or
@@ -80,9 +80,11 @@ class ToolTimeline {
   // is its time. The tool's spec (tool(i).path) records it too.
   void add_keyframe(size_t i, double t, const std::array<double, 3>& lps, const Vec3& origin);
   void set_end(size_t i, double end_s);  // tool i's window closes at end_s (s, after its start)
-  // The blades' sweep state of `checkpoint`, an earlier copy of this timeline (a restart from it): tools
-  // added since have not swept yet.
-  void restore_sweeps(const ToolTimeline& checkpoint);
+  // The blades' sweep state (per tool, the time its current sweep started), to restore_sweeps() on a
+  // restart from that point: tools added since have not swept yet.
+  using SweepState = std::vector<std::optional<double>>;
+  SweepState sweep_state() const;
+  void restore_sweeps(const SweepState& checkpoint);
 
  private:
   struct Path {
