@@ -2,7 +2,7 @@
 # Reruns every benchmark with one command and rewrites docs/benchmarks.md (machine and date included).
 #   bench/run.sh                 build (Release) if needed, then run every section
 #   bench/run.sh render fem      only these sections (preprocess tetmesh surface sim render fem collision instruments vessel
-#                                kidney accuracy);
+#                                kidney accuracy live);
 #                                the others in docs/benchmarks.md stay as they are
 #   BUILD=build-dev bench/run.sh fem        an existing build folder (brought up to date) instead of the release preset
 #   TVE_OUT=DIR bench/run.sh accuracy       the tables of a finished bench/time_vs_error.sh run in DIR, not a new run
@@ -399,5 +399,50 @@ if want accuracy; then
     } >"$WORK/local_region.md"
     splice local_region "$WORK/local_region.md"
   fi
+fi
+# Live sessions (issue 22): bench_live_session drives each heart model's LiveSession as ctsurg-live does
+# (ticks of advance(1/60), the user's messages between them, a frame each tick) on the demo's heart
+# inputs: $BUILD/demo/heart when the demo was made (make -f scripts/Makefile demo), else made here with the
+# demo patient's settings (data_samples/patients/heart/patient.mk: 2.4 mm cells, tets at 6 mm), cached in
+# $BUILD/bench_live/heart.
+if want live; then
+  heart=$BUILD/demo/heart
+  if [[ ! -f $heart/grid.h5 || ! -f $heart/surface_textured.h5 || ! -f $heart/tetmesh.h5 ]]; then
+    heart=$BUILD/bench_live/heart
+    mkdir -p "$heart"
+    [[ -f $heart/ct.h5 ]] || "$BIN/ctsurg-import" -q data_samples/heart/heart_ct.nii.gz "$heart/ct.h5"
+    [[ -f $heart/grid.h5 ]] || "$BIN/ctsurg-grid" -q "$heart/ct.h5" data_samples/heart/heart_mask.nii.gz "$heart/grid.h5" \
+      --voxel-mm 2.4 --label-names 1=heart
+    [[ -f $heart/surface.h5 ]] || "$BIN/ctsurg-surface" -q "$heart/grid.h5" "$heart/surface.h5"
+    [[ -f $heart/surface_textured.h5 ]] || "$BIN/ctsurg-normalmap" -q "$heart/surface.h5" "$heart/grid.h5" "$heart/surface_textured.h5"
+    [[ -f $heart/tetmesh.h5 ]] || "$BIN/ctsurg-tetmesh" -q "$heart/grid.h5" "$heart/tetmesh.h5" --cell-size 6
+  fi
+  liv=$WORK/live.md
+  {
+    echo "## Live sessions on the heart (\`bench/run.sh live\`, issue 22)"
+    echo
+    machine_line
+    echo "date: $(date -u +%Y-%m-%d); ctsurg $(git describe --always --dirty 2>/dev/null || echo unknown), Release build."
+    echo "\`$BUILD/bin/bench_live_session\` (its header says more): each heart scenario's model as a LiveSession (the scenario"
+    echo "without its \`tools:\`) on the demo's heart (2.4 mm grid, surface_textured.h5, tets at 6 mm), driven as ctsurg-live drives"
+    echo "it: each tick (1/60 s of wall time) applies the client's messages that arrived (JSON through parse_live_message),"
+    echo "advances the session by the simulated time owed to real time (the server's LiveClock, live_clock.h: a late tick's"
+    echo "backlog caught up to 0.1 s, a quasi-static frame longer than a tick paid back by ticks that do not advance) and"
+    echo "sends a picture when something changed (\`encode_live_frame(live_frame_of(...))\`). The user, in wall time: a grab"
+    echo "(8 mm) at the apex's surface vertex dragged 25 mm in 3 s, a move every 1/60 s, held 0.5 s and released; then"
+    echo "heart_cut's incision (20 mm edge, 40 mm) drawn in 1 s. Real-time factor = simulated s / wall s over the whole"
+    echo "script (a grab's begin and each cut refactorise an FEM model: 30-300 ms); while dragging = from 0.5 s to 3 s (the"
+    echo "steady drag, what the target is judged on); per-picture time = messages + advance + frame. Unpaced: the loop"
+    echo "never sleeping, what the server could send. Bytes per frame: 56 + 12 V positions only, + 12 F with the triangles"
+    echo "(the first frame and after a cut changed them). Steps: the engine's over the paced run (a static model: one"
+    echo "equilibrium per frame). Target (issue 22): real-time factor >= 1 with"
+    echo ">= 30 pictures/s on 2 cores. Load average at the start: $(cut -d' ' -f1-3 /proc/loadavg) (a shared machine)."
+    echo
+    "$BIN/bench_live_session" --heart "$heart" --markdown --threads 1
+    "$BIN/bench_live_session" --heart "$heart" --threads 2
+    echo
+    echo "Load average at the end: $(cut -d' ' -f1-3 /proc/loadavg)."
+  } >"$liv"
+  splice live "$liv"
 fi
 echo "bench/run.sh: wrote $doc"

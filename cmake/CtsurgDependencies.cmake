@@ -8,6 +8,8 @@ find_package(OpenSSL REQUIRED COMPONENTS Crypto)
 find_package(OpenCV REQUIRED COMPONENTS core imgproc imgcodecs)
 find_package(OpenMP REQUIRED COMPONENTS CXX)
 find_package(Threads REQUIRED)
+# Boost.Beast and Boost.Asio (header-only): ctsurg-live's HTTP and WebSocket server.
+find_package(Boost 1.74 REQUIRED)
 # zlib: ctsurg checks gzip and zlib streams itself (NIfTI .nii.gz, compressed MetaImage).
 find_package(ZLIB REQUIRED)
 # ITK (with GDCM) only for medical image I/O, confined to preprocess/src/*reader*.cpp.

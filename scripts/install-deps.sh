@@ -24,13 +24,16 @@ packages=(
   # npm packages (below): the Khronos glTF validator the tests run on every .glb/.gltf, and the HTML
   # viewer that ctsurg-render --viewer embeds at build time
   nodejs npm
+  # ctsurg-live's web server: Boost.Beast (HTTP and WebSocket, header-only) on Boost.Asio
+  libboost-dev
   # the browser the HTML viewer's test opens (headless, WebGL on the CPU through SwiftShader)
   chromium
 )
 
 # The folders with a package.json and a pinned package-lock.json: tests/support/gltf (gltf-validator),
-# render/viewer (@google/model-viewer, read by render/CMakeLists.txt at build time).
-npm_folders=(tests/support/gltf render/viewer)
+# render/viewer (@google/model-viewer, read by render/CMakeLists.txt at build time), sim/live/page
+# (three.js for ctsurg-live's page, read by sim/live/CMakeLists.txt at build time).
+npm_folders=(tests/support/gltf render/viewer sim/live/page)
 
 # npm ci in each npm folder, only when its node_modules is missing or was installed from another lock:
 # reruns stay offline.

@@ -35,7 +35,26 @@ std::once_flag g_handlers_installed;
 // (<= 10 digits) + "-".
 constexpr std::size_t kTempPrefixMax = 28;
 
+// The handlers that were there before ours (SIGINT, SIGTERM, SIGHUP), e.g. a server's graceful stop.
+constexpr int kSignals[] = {SIGINT, SIGTERM, SIGHUP};
+struct sigaction g_previous[3];
+
+// A signal while temporaries exist: when the program had its own handler (it means to stop
+// gracefully, and its writers then remove their temporaries themselves), that handler runs; when it
+// ignored the signal (a background job's SIGINT), nothing happens; otherwise the temporaries are
+// deleted and the signal ends the process as it would have.
 extern "C" void remove_temporaries_and_reraise(int sig) {
+  for (int k = 0; k < 3; ++k) {
+    if (kSignals[k] != sig) continue;
+    const struct sigaction& previous = g_previous[k];
+    if (previous.sa_flags & SA_SIGINFO) {
+      if (previous.sa_sigaction != nullptr) return previous.sa_sigaction(sig, nullptr, nullptr);
+    } else if (previous.sa_handler == SIG_IGN) {
+      return;
+    } else if (previous.sa_handler != SIG_DFL) {
+      return previous.sa_handler(sig);
+    }
+  }
   for (int s = 0; s < kSlots; ++s) {
     if (g_slot_used[s].load()) ::unlink(g_temp_paths[s]);
   }
@@ -45,9 +64,10 @@ extern "C" void remove_temporaries_and_reraise(int sig) {
 
 int register_temporary(const fs::path& p) {
   std::call_once(g_handlers_installed, [] {
-    std::signal(SIGINT, remove_temporaries_and_reraise);
-    std::signal(SIGTERM, remove_temporaries_and_reraise);
-    std::signal(SIGHUP, remove_temporaries_and_reraise);
+    struct sigaction ours {};
+    ours.sa_handler = remove_temporaries_and_reraise;
+    sigemptyset(&ours.sa_mask);
+    for (int k = 0; k < 3; ++k) ::sigaction(kSignals[k], &ours, &g_previous[k]);
   });
   const std::string s = p.string();
   if (s.size() >= sizeof(g_temp_paths[0])) return -1;

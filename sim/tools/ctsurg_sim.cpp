@@ -14,6 +14,7 @@
 #include "ctsurg/sim/scenario/scenario.h"
 #include "ctsurg/sim/scenario/scenario_model.h"
 #include "ctsurg/sim/scenario/scenario_run.h"
+#include "scenario_options.h"
 
 #include <spdlog/spdlog.h>
 
@@ -23,8 +24,8 @@
 namespace fs = std::filesystem;
 
 int main(int argc, char** argv) {
-  std::string scenario_path, output, grid, surface, tetmesh, centerline, backend;
-  int threads = -1;
+  std::string scenario_path, output;
+  ctsurg::sim::ScenarioOverrides overrides;
   bool describe = false, force = false;
   // Longer runs ask for --force: an hour of this machine, estimated from the run's first second.
   constexpr double kMaxWallS = 3600;
@@ -38,27 +39,17 @@ int main(int argc, char** argv) {
       [&](CLI::App& app) {
         app.add_option("scenario", scenario_path, "Scenario file (.yaml, .yml or .json)")->required();
         app.add_option("-o,--output", output, "Trajectory to write (.h5); default: the scenario's output.trajectory");
-        app.add_option("--grid", grid, "Occupancy grid file (overrides model.grid)");
-        app.add_option("--surface", surface, "Surface file (overrides model.surface)");
-        app.add_option("--tetmesh", tetmesh, "Tet mesh file (overrides model.tetmesh)");
-        app.add_option("--centerline", centerline, "Centerline file (overrides model.centerline; kind vessel)");
-        app.add_option("--backend", backend, "cpu, cuda or auto (overrides backend)")->check(CLI::IsMember({"cpu", "cuda", "auto"}));
+        overrides.declare(app);
         app.add_flag("--describe", describe,
                      "Print what the scenario reads and writes (model, input files, trajectory, render requests) as JSON "
                      "and exit without running; for the pipeline (scripts/Makefile)");
-        app.add_option("--threads", threads, "CPU threads, 0 = automatic (overrides threads)")->check(CLI::Range(0, 1024));
         app.add_flag("--force", force,
                      "Run even when the run is estimated (from its first second) to take more than an hour");
       },
       [&](const ctsurg::ToolContext& ctx) {
         ctsurg::sim::Scenario s = ctsurg::sim::read_scenario_file(scenario_path);
         if (!output.empty()) s.trajectory = output;
-        if (!grid.empty()) s.grid = grid;
-        if (!surface.empty()) s.surface = surface;
-        if (!tetmesh.empty()) s.tetmesh = tetmesh;
-        if (!centerline.empty()) s.centerline = centerline;
-        if (!backend.empty()) s.backend = backend;
-        if (threads >= 0) s.threads = threads;
+        overrides.apply(s);
         if (describe) {
           std::printf("%s\n", ctsurg::sim::describe_scenario(s).c_str());
           return;

@@ -11,6 +11,7 @@ mkdir -p "$out"/{fuzz_nifti,fuzz_nrrd,fuzz_metaimage,fuzz_dicom_folder,fuzz_scen
 mkdir -p "$out"/{fuzz_hu_volume_file,fuzz_occupancy_grid_file,fuzz_surface_mesh_file,fuzz_tet_mesh_file,fuzz_trajectory_file,fuzz_centerline_file}
 mkdir -p "$out"/{fuzz_stl,fuzz_obj,fuzz_ply}
 mkdir -p "$out"/{fuzz_seg_nrrd,fuzz_vtu,fuzz_msh,fuzz_medit}
+mkdir -p "$out"/fuzz_live_message
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 q="-q"
@@ -86,5 +87,30 @@ open(sys.argv[1] + "/one_layer.seg.nrrd", "wb").write(seg(1, "raw"))
 open(sys.argv[1] + "/two_layers.seg.nrrd", "wb").write(seg(2, "gzip"))
 PY
 
+# The live protocol: every client message (positions on the bundled heart), and two server frames (the
+# frame decoder reads the same inputs): a tetrahedron with its triangles, and its positions alone.
+python3 - "$out/fuzz_live_message" <<'PY'
+import struct, sys
+messages = {
+    "begin_grab": '{"type": "begin", "tool": "grab", "radius_mm": 8, "position_mm": [38.5, -236.25, 596], "seq": 1}',
+    "begin_probe": '{"type": "begin", "tool": "probe", "radius_mm": 5, "position_mm": [20, -240, 640]}',
+    "begin_cut": '{"type": "begin", "tool": "cut", "blade_edge_mm": [0, 20, 0], "position_mm": [25, -234, 615], "seq": 7}',
+    "move": '{"type": "move", "id": 0, "position_mm": [41.2, -243.0, 593.3], "seq": 4294967295}',
+    "end": '{"type": "end", "id": 3, "seq": 12}',
+    "pause": '{"type": "pause"}',
+    "resume": '{"type":"resume","seq":0}',
+    "reset": '{"type": "reset"}',
+    "save": '{"type": "save", "seq": 99}',
+}
+for name, text in messages.items():
+    open(f"{sys.argv[1]}/{name}.json", "w").write(text)
+def frame(flags, triangles):
+    positions = [0, 0, 0, 10, 0, 0, 0, 10, 0, 0, 0, 10]
+    tris = [0, 2, 1, 0, 1, 3, 1, 2, 3, 0, 3, 2]
+    head = b"CTLF" + struct.pack("<HHQdqQIIII", 2, flags, 41, 0.7, 4167, 2, 4, 4, 17, 0)
+    return head + struct.pack("<12f", *positions) + (struct.pack("<12I", *tris) if triangles else b"")
+open(f"{sys.argv[1]}/frame_triangles.bin", "wb").write(frame(1, True))
+open(f"{sys.argv[1]}/frame_positions.bin", "wb").write(frame(2, False))
+PY
 python3 "$root/tests/fuzz/make_dicom_seed.py" "$out/fuzz_dicom_folder/two_slices.bin"
 echo "fuzz seeds: $(find "$out" -type f | wc -l) files, $(du -sk "$out" | cut -f1) KiB in $out"

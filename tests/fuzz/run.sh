@@ -17,7 +17,7 @@ targets=("$@")
 if ((${#targets[@]} == 0)); then
   targets=(fuzz_nifti fuzz_nrrd fuzz_metaimage fuzz_dicom_folder fuzz_scenario fuzz_hu_volume_file
            fuzz_occupancy_grid_file fuzz_surface_mesh_file fuzz_tet_mesh_file fuzz_trajectory_file fuzz_centerline_file fuzz_stl fuzz_obj fuzz_ply
-           fuzz_seg_nrrd fuzz_vtu fuzz_msh fuzz_medit)
+           fuzz_seg_nrrd fuzz_vtu fuzz_msh fuzz_medit fuzz_live_message)
 fi
 mkdir -p build-fuzz/findings build-fuzz/logs
 # Third-party leaks on error paths are suppressed (tests/fuzz/lsan.supp says which and why).
@@ -26,8 +26,10 @@ export UBSAN_OPTIONS="print_stacktrace=1"
 run_one() {
   local t=$1 seconds=$2
   mkdir -p "build-fuzz/corpus/$t"
+  local dict=()  # a target's dictionary of tokens, when it has one (tests/fuzz/<target>.dict)
+  [[ -f tests/fuzz/$t.dict ]] && dict=(-dict="tests/fuzz/$t.dict")
   # The corpus grows across runs (kept in build-fuzz/corpus); the seeds are read-only inputs.
-  if build-fuzz/bin/"$t" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 -max_len=65536 -print_final_stats=1 \
+  if build-fuzz/bin/"$t" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 -max_len=65536 -print_final_stats=1 "${dict[@]}" \
        -artifact_prefix="build-fuzz/findings/$t-" "build-fuzz/corpus/$t" "build-fuzz/seeds/$t" \
        >"build-fuzz/logs/$t.log" 2>&1; then
     echo "$t: $(grep -o 'stat::number_of_executed_units: [0-9]*' "build-fuzz/logs/$t.log" | grep -o '[0-9]*$') runs, no finding"

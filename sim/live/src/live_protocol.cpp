@@ -1,7 +1,6 @@
 #include "ctsurg/sim/live/live_protocol.h"
 
 #include "ctsurg/core/error.h"
-#include "ctsurg/sim/live/live_session.h"
 
 #include <nlohmann/json.hpp>
 
@@ -68,7 +67,8 @@ int tool_id(const json& m, const LiveProtocolLimits& limits) {
   return static_cast<int>(id);
 }
 
-void only(const json& m, const std::set<std::string>& keys) {
+void only(const json& m, std::set<std::string> keys) {
+  keys.insert("seq");  // any message may carry it
   for (const auto& [key, value] : m.items()) {
     if (!keys.count(key)) refuse(key.size() > 40 ? key.substr(0, 40) + "..." : key, "unknown key for this type");
   }
@@ -99,6 +99,13 @@ LiveMessage parse_live_message(std::string_view text, const LiveProtocolLimits& 
   if (!type.is_string()) refuse("type", "must be a string");
   const std::string t = type.get<std::string>();
   LiveMessage out;
+  if (const auto seq = m.find("seq"); seq != m.end()) {
+    if (!seq->is_number_integer()) refuse("seq", "must be an integer");
+    if (!seq->is_number_unsigned() && seq->get<int64_t>() < 0) refuse("seq", "must be in 0 .. 4294967295");
+    if (seq->get<uint64_t>() > UINT32_MAX) refuse("seq", "must be in 0 .. 4294967295");
+    out.has_seq = true;
+    out.seq = static_cast<uint32_t>(seq->get<uint64_t>());
+  }
   if (t == "begin") {
     out.type = LiveMessage::Type::begin;
     const json& tool = member(m, "tool");
@@ -161,8 +168,12 @@ std::vector<uint8_t> encode_live_frame(const LiveFrame& f) {
   put<uint64_t>(out, 32, f.topology_version);
   put<uint32_t>(out, 40, static_cast<uint32_t>(nv));
   put<uint32_t>(out, 44, f.triangle_count);
-  std::memcpy(out.data() + LiveFrame::kHeaderBytes, f.positions.data(), 4 * f.positions.size());
-  if (tris) std::memcpy(out.data() + LiveFrame::kHeaderBytes + 4 * f.positions.size(), f.triangles.data(), 4 * f.triangles.size());
+  put<uint32_t>(out, 48, f.seq);
+  put<uint32_t>(out, 52, 0);
+  // An empty vector's data() may be null, and memcpy from null is undefined even for 0 bytes (a fuzz
+  // finding: tests/fuzz_regressions/README.md): no copy without data.
+  if (!f.positions.empty()) std::memcpy(out.data() + LiveFrame::kHeaderBytes, f.positions.data(), 4 * f.positions.size());
+  if (tris && !f.triangles.empty()) std::memcpy(out.data() + LiveFrame::kHeaderBytes + 4 * f.positions.size(), f.triangles.data(), 4 * f.triangles.size());
   return out;
 }
 
@@ -170,7 +181,7 @@ LiveFrame decode_live_frame(std::span<const uint8_t> in) {
   if (in.size() < LiveFrame::kHeaderBytes) throw InputError("frame", "header", std::to_string(in.size()) + " bytes, shorter than the header");
   if (std::memcmp(in.data(), "CTLF", 4) != 0) throw InputError("frame", "magic", "not CTLF");
   LiveFrame f;
-  if (get<uint16_t>(in, 4) != LiveFrame::kVersion) throw InputError("frame", "version", std::to_string(get<uint16_t>(in, 4)) + ", expected 1");
+  if (get<uint16_t>(in, 4) != LiveFrame::kVersion) throw InputError("frame", "version", std::to_string(get<uint16_t>(in, 4)) + ", expected " + std::to_string(LiveFrame::kVersion));
   f.flags = get<uint16_t>(in, 6);
   f.frame = get<uint64_t>(in, 8);
   f.time_s = get<double>(in, 16);
@@ -178,38 +189,21 @@ LiveFrame decode_live_frame(std::span<const uint8_t> in) {
   f.topology_version = get<uint64_t>(in, 32);
   const uint64_t nv = get<uint32_t>(in, 40);
   f.triangle_count = get<uint32_t>(in, 44);
+  f.seq = get<uint32_t>(in, 48);
   const bool tris = (f.flags & LiveFrame::triangles_follow) != 0;
   const uint64_t expected = LiveFrame::kHeaderBytes + 12 * nv + (tris ? 12 * uint64_t{f.triangle_count} : 0);
   if (in.size() != expected) {
     throw InputError("frame", "size", std::to_string(in.size()) + " bytes, the counts say " + std::to_string(expected));
   }
   f.positions.resize(3 * nv);
-  std::memcpy(f.positions.data(), in.data() + LiveFrame::kHeaderBytes, 12 * nv);
-  if (tris) {
+  if (nv > 0) std::memcpy(f.positions.data(), in.data() + LiveFrame::kHeaderBytes, 12 * nv);  // not to null (V = 0)
+  if (tris && f.triangle_count > 0) {
     f.triangles.resize(3 * size_t{f.triangle_count});
     std::memcpy(f.triangles.data(), in.data() + LiveFrame::kHeaderBytes + 12 * nv, f.triangles.size() * 4);
     for (size_t k = 0; k < f.triangles.size(); ++k) {
       if (f.triangles[k] >= nv) throw InputError("frame", "triangles[" + std::to_string(k / 3) + "]", "vertex index beyond V");
     }
   }
-  return f;
-}
-
-LiveFrame live_frame_of(LiveSession& session, uint64_t frame, uint64_t sent_topology) {
-  LiveFrame f;
-  f.frame = frame;
-  f.time_s = session.time();
-  f.steps = session.steps();
-  f.topology_version = session.topology_version();
-  session.surface(f.positions);
-  const std::vector<uint32_t>& tris = session.triangles();
-  f.triangle_count = static_cast<uint32_t>(tris.size() / 3);
-  if (f.topology_version != sent_topology) {
-    f.flags |= LiveFrame::triangles_follow;
-    f.triangles = tris;
-  }
-  if (session.paused()) f.flags |= LiveFrame::paused;
-  if (!session.stopped_message().empty()) f.flags |= LiveFrame::stopped;
   return f;
 }
 

@@ -139,6 +139,7 @@ void SpringEngine::hold_components(std::vector<int32_t> components) {
 
 StabilityReport SpringEngine::step(const std::vector<ToolInput>& tools, int steps) {
   for (int k = 0; k < steps; ++k) {
+    release_ended_grabs(tools);
     stepper_->step(params_);
     for (const int32_t c : held_components_) {
       const size_t i = static_cast<size_t>(c / 3);
@@ -155,6 +156,22 @@ StabilityReport SpringEngine::step(const std::vector<ToolInput>& tools, int step
 
 void SpringEngine::equilibrium(const std::vector<ToolInput>&, double) {
   throw RuntimeError(options_.where + ": a spring model has no quasi-static solve (it steps in time)");
+}
+
+// A grab whose tool is no longer active after this step lets go before the step: its particles move
+// freely in it. On the CPU placing happens only in apply_tools, after the step, so letting go there
+// gave the same; the device places held grabs inside each step (DeviceSimulation::step), so it must
+// know before stepping (found on the first GPU run: the device kept the particles one step longer).
+void SpringEngine::release_ended_grabs(const std::vector<ToolInput>& tools) {
+  for (size_t i = 0; i < tools.size() && i < holds_.size(); ++i) {
+    Hold& h = holds_[i];
+    if (tools[i].kind == ToolKind::grab && h.grab && !tools[i].active) {
+      h.grab.reset();
+      stepper_->release_grab(h.handle);
+      h.released = true;
+      tool_work_ = true;  // the release turns the stretch into motion
+    }
+  }
 }
 
 void SpringEngine::apply_tools(const std::vector<ToolInput>& tools) {
@@ -175,12 +192,6 @@ void SpringEngine::apply_tools(const std::vector<ToolInput>& tools) {
           }
           note(tool.label + ": grabbed " + std::to_string(h.grab->particles.size()) + " particles at t = " +
                std::to_string(time_) + " s");
-        }
-        if (h.grab && !tool.active) {
-          h.grab.reset();
-          stepper_->release_grab(h.handle);
-          h.released = true;
-          tool_work_ = true;  // the release turns the stretch into motion
         }
         if (h.grab) {
           stepper_->apply_grab(*h.grab, h.handle, tool.centre);

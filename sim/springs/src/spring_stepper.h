@@ -67,7 +67,7 @@ class HostSpringStepper final : public SpringStepper {
 };
 
 // Grabs are held on the device (DeviceSimulation's handles) and placed after every step there.
-// Unverified on a GPU in this repository's CI (docs/gpu.md).
+// CI has no GPU; run on an H100 on 2026-11-26 (docs/gpu.md).
 class DeviceSpringStepper final : public SpringStepper {
  public:
   DeviceSpringStepper(SpringModel& model, ParticleState& state) : model_(model), state_(state) {

@@ -238,6 +238,9 @@ TEST_F(FemDeviceTest, StaticSolveWithTheDeviceCgMatchesTheCpu) {
     FemStaticOptions o;
     o.cg_tolerance = 1e-12;
     o.inexact_newton = false;  // every Newton step at 1e-12, as the tolerance above assumes
+    // The same method on both: Jacobi-preconditioned CG (the CPU would otherwise solve directly, with
+    // CHOLMOD, in a few iterations: its automatic choice, which the device does not have).
+    o.linear_solve = FemLinearSolve::iterative;
     const FemStaticResult cpu = solve_fem_static(p.model, p.bc, {}, o, Backend::cpu);
     const FemStaticResult gpu = solve_fem_static(p.model, p.bc, {}, o, Backend::cuda);
     const FemStaticResult again = solve_fem_static(p.model, p.bc, {}, o, Backend::cuda);

@@ -5,10 +5,13 @@
 #include "ctsurg/sim/live/live_protocol.h"
 
 #include "ctsurg/core/error.h"
+#include "test_support.h"
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstring>
+#include <span>
 #include <random>
 #include <string>
 
@@ -135,6 +138,24 @@ TEST(LiveProtocol, RandomAndMutatedBytesAreParsedOrRefusedNeverCrash) {
   EXPECT_GT(refused, 10000);
 }
 
+TEST(LiveProtocol, AnyMessageMayCarryASequenceNumber) {
+  const LiveMessage m = parse_live_message(R"({"type": "move", "id": 2, "position_mm": [30, -15, 35], "seq": 4294967295})", bar_limits());
+  EXPECT_TRUE(m.has_seq);
+  EXPECT_EQ(m.seq, 4294967295u);
+  EXPECT_FALSE(parse_live_message(R"({"type": "pause"})", bar_limits()).has_seq);
+  EXPECT_EQ(parse_live_message(R"({"type": "save", "seq": 0})", bar_limits()).seq, 0u);
+  for (const char* bad : {R"({"type": "pause", "seq": -1})", R"({"type": "pause", "seq": 4294967296})",
+                          R"({"type": "pause", "seq": 1.5})", R"({"type": "pause", "seq": "7"})",
+                          R"({"type": "pause", "seq": 18446744073709551615})"}) {
+    try {
+      parse_live_message(bad, bar_limits());
+      ADD_FAILURE() << bad << " was accepted";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("seq"), std::string::npos) << e.what();
+    }
+  }
+}
+
 TEST(LiveProtocol, FramesRoundTripBitForBit) {
   LiveFrame f;
   f.flags = LiveFrame::triangles_follow | LiveFrame::paused;
@@ -142,6 +163,7 @@ TEST(LiveProtocol, FramesRoundTripBitForBit) {
   f.time_s = 0.1 + 0.2;
   f.steps = 98765;
   f.topology_version = 7;
+  f.seq = 4000000000u;
   f.positions = {1.5f, -2.25f, 600.125f, 0.1f, 1e-30f, -3e38f, 7, 8, 9};
   f.triangles = {0, 1, 2};
   f.triangle_count = 1;
@@ -155,6 +177,7 @@ TEST(LiveProtocol, FramesRoundTripBitForBit) {
   EXPECT_EQ(g.steps, f.steps);
   EXPECT_EQ(g.topology_version, f.topology_version);
   EXPECT_EQ(g.triangle_count, 1u);
+  EXPECT_EQ(g.seq, f.seq);
   EXPECT_EQ(0, std::memcmp(g.positions.data(), f.positions.data(), 36));
   EXPECT_EQ(g.triangles, f.triangles);
   // Without the triangles: the count stays, the indices are not sent.
@@ -170,7 +193,7 @@ TEST(LiveProtocol, FramesRoundTripBitForBit) {
   bad[0] = 'X';
   EXPECT_THROW(decode_live_frame(bad), InputError);
   bad = bytes;
-  bad[4] = 2;
+  bad[4] = 1;  // version 1 had no seq (a 48-byte header)
   EXPECT_THROW(decode_live_frame(bad), InputError);
   bad = bytes;
   bad.pop_back();
@@ -179,4 +202,21 @@ TEST(LiveProtocol, FramesRoundTripBitForBit) {
   bad[bad.size() - 4] = 3;  // triangle index 3 >= V
   EXPECT_THROW(decode_live_frame(bad), InputError);
   EXPECT_THROW(decode_live_frame(std::span<const uint8_t>(bytes.data(), 10)), InputError);
+}
+
+// A fuzz finding (tests/fuzz_regressions/README.md): a frame without vertices made decode_live_frame
+// memcpy to null.
+TEST(LiveProtocol, AFrameWithoutVerticesDecodesAndEncodesBack) {
+  const std::string bytes = ctsurg::test::read_bytes(ctsurg::test::source_dir() / "tests" / "fuzz_regressions" /
+                                                     "fuzz_live_message" / "crash-c65ce571");
+  const std::span<const uint8_t> in(reinterpret_cast<const uint8_t*>(bytes.data()), bytes.size());
+  const LiveFrame f = decode_live_frame(in);
+  EXPECT_TRUE(f.positions.empty());
+  EXPECT_TRUE(f.triangles.empty());
+  std::vector<uint8_t> expected(in.begin(), in.end());
+  std::fill(expected.begin() + 52, expected.end(), 0);  // the padding
+  EXPECT_EQ(encode_live_frame(f), expected);
+  LiveFrame empty;
+  empty.flags = LiveFrame::triangles_follow;
+  EXPECT_EQ(decode_live_frame(encode_live_frame(empty)).triangle_count, 0u);
 }

@@ -13,6 +13,10 @@
 //   {"type": "end", "id": n}
 //   {"type": "pause"} | {"type": "resume"} | {"type": "reset"} | {"type": "save"}
 //
+// Any message may also carry "seq": n (an integer 0 .. 2^32 - 1, the client's own count): the server
+// echoes the seq of the last message it had handed to the session in each frame it sends after, so the
+// page can time a mouse move to the picture that shows it.
+//
 // Every refusal is an InputError("message", field, problem) naming the field ("position_mm[2]", "type",
 // "(text)" for what is not JSON or too long) and what is wrong; nothing a client sends makes the parser
 // crash (tests/sim/live/test_live_protocol.cpp feeds it 20,000 random and mutated messages).
@@ -21,7 +25,7 @@
 //
 //   offset  bytes  type     field
 //        0      4  char[4]  magic "CTLF"
-//        4      2  uint16   version, 1
+//        4      2  uint16   version, 2
 //        6      2  uint16   flags: bit 0 the triangles follow; bit 1 paused; bit 2 stopped (the guard's
 //                           message goes as a separate text message)
 //        8      8  uint64   frame number (the server's count of frames sent)
@@ -31,8 +35,10 @@
 //                           changes the triangles)
 //       40      4  uint32   V, the surface's vertex count
 //       44      4  uint32   F, its triangle count now (whether or not they follow)
-//       48   12 V  float32  vertex positions x, y, z (LPS mm), vertex by vertex
-//   48+12V   12 F  uint32   triangles (3 vertex indices each), only with flag bit 0: the first frame and
+//       48      4  uint32   seq: the "seq" of the last client message applied before this frame (0: none)
+//       52      4  uint32   0 (padding: the positions start 8-byte aligned)
+//       56   12 V  float32  vertex positions x, y, z (LPS mm), vertex by vertex
+//   56+12V   12 F  uint32   triangles (3 vertex indices each), only with flag bit 0: the first frame and
 //                           whenever the topology version changed since the last frame sent
 #pragma once
 
@@ -48,6 +54,9 @@ namespace ctsurg::sim {
 
 class LiveSession;
 
+inline constexpr double kMaxLiveToolRadiusMm = 50;  // a grab's or probe's radius, mm
+inline constexpr double kMaxLiveBladeMm = 200;      // a blade's edge length, mm
+
 struct LiveMessage {
   enum class Type { begin, move, end, pause, resume, reset, save };
   Type type = Type::pause;
@@ -56,6 +65,8 @@ struct LiveMessage {
   std::array<double, 3> blade_edge_mm{};     // begin cut
   std::array<double, 3> position_mm{};       // begin, move: LPS mm
   int id = -1;                               // move, end
+  bool has_seq = false;                      // "seq" given
+  uint32_t seq = 0;                          // the client's count (any type)
 };
 
 struct LiveProtocolLimits {
@@ -69,8 +80,8 @@ struct LiveProtocolLimits {
 LiveMessage parse_live_message(std::string_view text, const LiveProtocolLimits& limits);
 
 struct LiveFrame {
-  static constexpr uint16_t kVersion = 1;
-  static constexpr size_t kHeaderBytes = 48;
+  static constexpr uint16_t kVersion = 2;
+  static constexpr size_t kHeaderBytes = 56;
   enum Flags : uint16_t { triangles_follow = 1, paused = 2, stopped = 4 };
   uint16_t flags = 0;
   uint64_t frame = 0;
@@ -78,6 +89,7 @@ struct LiveFrame {
   int64_t steps = 0;
   uint64_t topology_version = 0;
   uint32_t triangle_count = 0;       // F
+  uint32_t seq = 0;                  // the last applied client message's seq (0: none)
   std::vector<float> positions;      // V x 3, LPS mm
   std::vector<uint32_t> triangles;   // F x 3 when flags has triangles_follow, else empty
 };

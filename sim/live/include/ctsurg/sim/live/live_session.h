@@ -44,6 +44,7 @@
 #pragma once
 
 #include "ctsurg/core/trajectory_file.h"
+#include "ctsurg/sim/live/live_protocol.h"
 #include "ctsurg/sim/scenario/scenario.h"
 #include "ctsurg/sim/scenario/scenario_run.h"
 
@@ -65,8 +66,8 @@ struct LiveToolSpec {
   std::array<double, 3> position_mm{};   // LPS mm, finite
 };
 
-inline constexpr double kMaxLiveToolRadiusMm = 50;
-inline constexpr double kMaxLiveBladeMm = 200;
+// The tool a page's begin message asks for (live_protocol.h).
+inline LiveToolSpec live_tool_spec(const LiveMessage& m) { return {m.tool, m.radius_mm, m.blade_edge_mm, m.position_mm}; }
 
 // What advance() did.
 struct LiveAdvance {

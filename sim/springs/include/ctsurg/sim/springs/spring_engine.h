@@ -123,6 +123,7 @@ class SpringEngine final : public SimulationEngine {
   };
 
   void apply_tools(const std::vector<ToolInput>& tools);
+  void release_ended_grabs(const std::vector<ToolInput>& tools);
   void sweep_blade(const ToolInput& blade, const Vec3& from, const Vec3& to);
   void place_stitches(const ToolInput& suture, Hold& hold);
   double spring_sum(int32_t particle) const;  // K_i: the stiffness of the particle's present springs, g/s^2
