@@ -19,20 +19,10 @@
 #include <cmath>
 #include <cstdio>
 #include <ctime>
-#include <fstream>
-#include <sstream>
 
 namespace fs = std::filesystem;
 
 namespace {
-
-std::string text_of(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw ctsurg::InputError(path.string(), "(file)", "cannot be read");
-  std::ostringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
 
 // The surface file's texture atlas and normal map for the page (RGBA8), when the session's surface is
 // that file's (same vertex count).
@@ -98,7 +88,8 @@ int main(int argc, char** argv) {
             ->check(CLI::Range(1.0, 150.0));
       },
       [&](const ctsurg::ToolContext&) {
-        ctsurg::sim::Scenario s = ctsurg::sim::read_scenario_file(scenario_path);
+        const std::string text = ctsurg::sim::read_scenario_text(scenario_path);  // read once: parsed, and kept for the save
+        ctsurg::sim::Scenario s = ctsurg::sim::parse_scenario(text, scenario_path, fs::path(scenario_path).parent_path());
         overrides.apply(s);
         options.port = static_cast<uint16_t>(port);
 
@@ -134,7 +125,7 @@ int main(int argc, char** argv) {
         }
 
         spdlog::info("live: building '{}' ({})", s.name, ctsurg::sim::to_string(s.model));
-        ctsurg::sim::LiveSession session(s, text_of(scenario_path), [](const std::string& note) { spdlog::info("live: {}", note); });
+        ctsurg::sim::LiveSession session(s, text, [](const std::string& note) { spdlog::info("live: {}", note); });
         std::vector<float> lps;
         session.surface(lps);
         if (read.surface) page_texture(s.surface, lps.size() / 3, options);

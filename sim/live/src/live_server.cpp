@@ -569,10 +569,12 @@ void LiveServer::Impl::simulate() {
   };
   const auto hello = [&]() {
     const std::array<double, 6> b = session.rest_bounds();
+    std::vector<float> lps;
+    session.surface(lps);
     json h{{"type", "hello"},
            {"scenario", session.scenario().name},
            {"model", options.model_description},
-           {"vertex_count", 0},
+           {"vertex_count", lps.size() / 3},
            {"triangle_count", session.triangles().size() / 3},
            {"bounds", b},
            {"margin_mm", options.margin_mm},
@@ -587,9 +589,6 @@ void LiveServer::Impl::simulate() {
            {"save_to", nullptr},
            {"library", std::string(live_page::library())},
            {"version", std::string("ctsurg ") + kVersion}};
-    std::vector<float> lps;
-    session.surface(lps);
-    h["vertex_count"] = lps.size() / 3;
     if (!options.normal_map_rgba.empty()) {
       h["normal_map"] = {{"width", options.normal_map_width}, {"height", options.normal_map_height}};
     }
@@ -613,11 +612,13 @@ void LiveServer::Impl::simulate() {
       case LiveMessage::Type::move:
         if (!tools.count(m.id)) throw InputError("message", "id", std::to_string(m.id) + " is not a tool this page holds");
         session.move_tool(m.id, m.position_mm);
+        unsaved = true;
         break;
       case LiveMessage::Type::end:
         if (!tools.count(m.id)) throw InputError("message", "id", std::to_string(m.id) + " is not a tool this page holds");
         session.end_tool(m.id);
         tools.erase(m.id);
+        unsaved = true;
         break;
       case LiveMessage::Type::pause:
         session.pause();

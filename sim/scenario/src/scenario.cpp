@@ -603,14 +603,16 @@ Scenario parse_scenario(const std::string& text, const fs::path& file, const fs:
   }
 }
 
-Scenario read_scenario_file(const fs::path& path) {
+std::string read_scenario_text(const fs::path& path) {
   check_input_file(path);
   if (fs::file_size(path) > (1u << 20)) throw InputError(path.string(), "", "more than 1 MiB: not a scenario file");
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(path.string(), "(file)", "cannot be opened");
   std::ostringstream text;
   text << in.rdbuf();
-  return parse_scenario(text.str(), path, path.parent_path());
+  return text.str();
 }
+
+Scenario read_scenario_file(const fs::path& path) { return parse_scenario(read_scenario_text(path), path, path.parent_path()); }
 
 }  // namespace ctsurg::sim

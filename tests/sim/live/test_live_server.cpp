@@ -9,6 +9,7 @@
 #include "ctsurg/sim/live/live_server.h"
 #include "ctsurg/sim/scenario/scenario.h"
 #include "ctsurg/sim/scenario/scenario_run.h"
+#include "live_test_scenarios.h"
 #include "scenario_test_files.h"
 #include "test_support.h"
 
@@ -38,16 +39,10 @@ using nlohmann::json;
 using namespace ctsurg;
 using namespace ctsurg::sim;
 using ctsurg::test::TempDir;
+using ctsurg::sim::test::expect_same_trajectory;
+using ctsurg::sim::test::live_bar_text;
 
 namespace {
-
-// The 16 x 4 x 4 bar of 2 mm cells (x 11..43, y -19..-11, z 31..39 mm), its x = 12 end fixed.
-std::string bar_text() {
-  return "ctsurg_scenario: 1\nname: live bar\nmodel:\n  kind: spring_grid\n  grid: grid.h5\n  surface: surface.h5\n"
-         "material:\n  youngs_modulus_pa: 20000\n  damping_per_s: 30\n"
-         "fixed:\n  - box_fraction: {min: [0, 0, 0], max: [0.01, 1, 1]}\n"
-         "time:\n  duration_s: 1\noutput:\n  trajectory: out.h5\n  frame_interval_s: 0.02\n";
-}
 
 // A session on the bar and its server, running on a thread of its own until destroyed.
 struct Running {
@@ -58,7 +53,8 @@ struct Running {
 
   explicit Running(LiveServerOptions options = {}) {
     ctsurg::sim::test::write_block_files(dir.path(), 16, 4, 4, 2.0);
-    session = std::make_unique<LiveSession>(parse_scenario(bar_text(), dir.path() / "bar.yaml", dir.path()), bar_text());
+    const std::string text = live_bar_text("", "0.02");
+    session = std::make_unique<LiveSession>(parse_scenario(text, dir.path() / "bar.yaml", dir.path()), text);
     if (options.save_scenario.empty()) {
       options.save_scenario = dir.path() / "saved.yaml";
       options.save_trajectory = dir.path() / "saved.h5";
@@ -311,12 +307,7 @@ TEST(LiveServer, ChromiumDragsAGrabAndACutAndTheSavedSessionReplays) {
   const std::string text = ctsurg::test::read_bytes(yaml);
   EXPECT_NE(text.find("grab:"), std::string::npos);
   EXPECT_NE(text.find("cut:"), std::string::npos);
-  const Trajectory saved = read_trajectory_file(r.dir.path() / "saved.h5");
-  const Trajectory replay = run_scenario(read_scenario_file(yaml));
-  ASSERT_EQ(saved.time, replay.time);
-  EXPECT_EQ(saved.vertices, replay.vertices);
-  EXPECT_EQ(saved.topologies, replay.topologies);
-  EXPECT_EQ(saved.blades, replay.blades);
+  expect_same_trajectory(read_trajectory_file(r.dir.path() / "saved.h5"), run_scenario(read_scenario_file(yaml)));
 }
 
 // The tool: Ctrl-C after a save still saves what came after it and ends cleanly (the file writers'
@@ -325,7 +316,7 @@ TEST(CtsurgLive, CtrlCAfterASaveSavesTheRestAndExitsCleanly) {
   TempDir dir;
   ctsurg::sim::test::write_block_files(dir.path(), 16, 4, 4, 2.0);
   const fs::path scenario = dir.path() / "bar.yaml", saved = dir.path() / "rehearsal.yaml";
-  std::ofstream(scenario) << bar_text();
+  std::ofstream(scenario) << live_bar_text("", "0.02");
   int out[2];
   ASSERT_EQ(pipe(out), 0);
   const pid_t pid = fork();
@@ -376,6 +367,5 @@ TEST(CtsurgLive, CtrlCAfterASaveSavesTheRestAndExitsCleanly) {
   size_t grabs = 0;
   for (size_t at = text.find("grab:"); at != std::string::npos; at = text.find("grab:", at + 1)) ++grabs;
   EXPECT_EQ(grabs, 2u) << text;
-  const Trajectory replay = run_scenario(read_scenario_file(saved));
-  EXPECT_EQ(replay.vertices, read_trajectory_file(dir.path() / "rehearsal.h5").vertices);
+  expect_same_trajectory(read_trajectory_file(dir.path() / "rehearsal.h5"), run_scenario(read_scenario_file(saved)));
 }

@@ -12,6 +12,7 @@
 #include "ctsurg/sim/live/live_protocol.h"
 #include "ctsurg/sim/scenario/scenario.h"
 #include "ctsurg/sim/scenario/scenario_run.h"
+#include "live_test_scenarios.h"
 #include "scenario_test_files.h"
 #include "test_support.h"
 
@@ -28,17 +29,10 @@ using namespace ctsurg;
 using namespace ctsurg::sim;
 using ctsurg::test::run_tool;
 using ctsurg::test::TempDir;
+using ctsurg::sim::test::expect_same_trajectory;
+using ctsurg::sim::test::live_bar_text;
 
 namespace {
-
-// The 16 x 4 x 4 bar of 2 mm cells (cell centres x 12..42, y -18..-12, z 32..38 mm), its x = 12 end
-// fixed; no tools of its own.
-std::string bar_text(const std::string& extra_time = "") {
-  return "ctsurg_scenario: 1\nname: live bar\nmodel:\n  kind: spring_grid\n  grid: grid.h5\n  surface: surface.h5\n"
-         "material:\n  youngs_modulus_pa: 20000\n  damping_per_s: 30\n"
-         "fixed:\n  - box_fraction: {min: [0, 0, 0], max: [0.01, 1, 1]}\n"
-         "time:\n  duration_s: 1\n" + extra_time + "output:\n  trajectory: out.h5\n  frame_interval_s: 0.01\n";
-}
 
 std::string fem_text(const std::string& solver) {
   return "ctsurg_scenario: 1\nname: live fem bar\nmodel:\n  kind: fem\n  tetmesh: tetmesh.h5\n  surface: surface.h5\n"
@@ -51,24 +45,6 @@ LiveSession session_of(const fs::path& dir, const std::string& text) {
   return LiveSession(parse_scenario(text, dir / "s.yaml", dir), text);
 }
 
-void expect_same(const Trajectory& a, const Trajectory& b) {
-  ASSERT_EQ(a.time, b.time);
-  EXPECT_EQ(a.rest_vertices, b.rest_vertices);
-  EXPECT_EQ(a.vertices, b.vertices);  // every coordinate bit for bit
-  EXPECT_EQ(a.topologies, b.topologies);
-  EXPECT_EQ(a.topology_of_frame, b.topology_of_frame);
-  EXPECT_EQ(a.closing_triangles, b.closing_triangles);
-  EXPECT_EQ(a.sphere_kinds, b.sphere_kinds);
-  EXPECT_EQ(a.spheres, b.spheres);
-  EXPECT_EQ(a.blades, b.blades);
-  EXPECT_EQ(a.dt_s, b.dt_s);
-  ASSERT_EQ(a.metrics.size(), b.metrics.size());
-  for (size_t m = 0; m < a.metrics.size(); ++m) {
-    EXPECT_EQ(a.metrics[m].name, b.metrics[m].name);
-    EXPECT_EQ(a.metrics[m].values, b.metrics[m].values) << a.metrics[m].name;
-  }
-}
-
 // Saves the session into dir and replays the saved scenario through run_scenario and ctsurg-sim: both
 // must give the session's trajectory.
 void expect_replays(const LiveSession& session, const fs::path& dir, const std::string& stem) {
@@ -77,11 +53,11 @@ void expect_replays(const LiveSession& session, const fs::path& dir, const std::
   const Trajectory live = session.trajectory();
   RunReport report;
   const Trajectory replay = run_scenario(read_scenario_file(yaml), &report);
-  expect_same(live, replay);
-  expect_same(live, read_trajectory_file(saved));
+  expect_same_trajectory(live, replay);
+  expect_same_trajectory(live, read_trajectory_file(saved));
   const auto r = run_tool("ctsurg-sim", {yaml.string(), "-o", tool.string(), "-q"});
   ASSERT_EQ(r.exit_code, 0) << r.output;
-  expect_same(live, read_trajectory_file(tool));
+  expect_same_trajectory(live, read_trajectory_file(tool));
 }
 
 double max_surface_move(const Trajectory& t, int64_t frame) {
@@ -98,7 +74,7 @@ double max_surface_move(const Trajectory& t, int64_t frame) {
 TEST(LiveSession, AGrabDraggedAcrossTheBarReplaysBitForBit) {
   TempDir dir;
   ctsurg::sim::test::write_block_files(dir.path(), 16, 4, 4, 2.0);
-  LiveSession session = session_of(dir.path(), bar_text());
+  LiveSession session = session_of(dir.path(), live_bar_text());
   EXPECT_EQ(session.frames(), 1);
   session.advance_events(7);  // some steps before the user acts
   const int grab = session.begin_tool({ToolKind::grab, 2.5, {}, {42, -15, 35}});
@@ -133,7 +109,7 @@ TEST(LiveSession, AGrabDraggedAcrossTheBarReplaysBitForBit) {
 TEST(LiveSession, ACutChangesTheTopologyAndReplaysBitForBit) {
   TempDir dir;
   ctsurg::sim::test::write_block_files(dir.path(), 16, 4, 4, 2.0);
-  LiveSession session = session_of(dir.path(), bar_text());
+  LiveSession session = session_of(dir.path(), live_bar_text());
   session.advance_events(3);
   const uint64_t before = session.topology_version();
   LiveFrame first = live_frame_of(session, 0, 0);
@@ -164,7 +140,7 @@ TEST(LiveSession, ACutChangesTheTopologyAndReplaysBitForBit) {
 TEST(LiveSession, AProbePausesResumesResetsAndKeepsRealTime) {
   TempDir dir;
   ctsurg::sim::test::write_block_files(dir.path(), 16, 4, 4, 2.0);
-  LiveSession session = session_of(dir.path(), bar_text());
+  LiveSession session = session_of(dir.path(), live_bar_text());
   const int probe = session.begin_tool({ToolKind::probe, 3, {}, {32, -15, 42.5}});
   for (int k = 1; k <= 30; ++k) {
     session.move_tool(probe, {32, -15, 42.5 - 0.1 * k});
@@ -249,7 +225,7 @@ TEST(LiveSession, AnFemCutBetweenBatchedStepsReplaysBitForBit) {
 TEST(LiveSession, AJumpThatMakesTheModelUnstableGoesBackToTheFrameBefore) {
   TempDir dir;
   ctsurg::sim::test::write_block_files(dir.path(), 16, 4, 4, 2.0);
-  LiveSession session = session_of(dir.path(), bar_text());
+  LiveSession session = session_of(dir.path(), live_bar_text());
   const int grab = session.begin_tool({ToolKind::grab, 2.5, {}, {42, -15, 35}});
   for (int k = 1; k <= 20; ++k) {
     session.move_tool(grab, {42, -15 - 0.1 * k, 35});
@@ -290,7 +266,7 @@ TEST(LiveSession, StepHalvingsWhileDraggingReplayBitForBit) {
   ctsurg::sim::test::write_block_files(dir.path(), 16, 4, 4, 2.0);
   // A step far above the critical one (0.17 ms): the guard fires at the first frames and the session
   // restarts from the last frame with half the step, as ctsurg-sim does; events wait until it is back.
-  LiveSession session = session_of(dir.path(), bar_text("  dt_s: 0.003\n  max_step_halvings: 6\n"));
+  LiveSession session = session_of(dir.path(), live_bar_text("  dt_s: 0.003\n  max_step_halvings: 6\n"));
   const int grab = session.begin_tool({ToolKind::grab, 2.5, {}, {42, -15, 35}});
   bool restarted = false;
   for (int k = 1; k <= 150; ++k) {
@@ -310,7 +286,7 @@ TEST(LiveSession, StepHalvingsWhileDraggingReplayBitForBit) {
 TEST(LiveSession, AGrabOnEmptySpaceIsReportedAndDropped) {
   TempDir dir;
   ctsurg::sim::test::write_block_files(dir.path(), 16, 4, 4, 2.0);
-  LiveSession session = session_of(dir.path(), bar_text());
+  LiveSession session = session_of(dir.path(), live_bar_text());
   session.advance_events(70);  // past the first frame
   const int grab = session.begin_tool({ToolKind::grab, 2, {}, {42, -15, 60}});
   const LiveAdvance r = session.advance_events(10);
@@ -326,7 +302,7 @@ TEST(LiveSession, AGrabOnEmptySpaceIsReportedAndDropped) {
 TEST(LiveSession, BadToolsAreRefusedWithTheFieldNamed) {
   TempDir dir;
   ctsurg::sim::test::write_block_files(dir.path(), 16, 4, 4, 2.0);
-  LiveSession session = session_of(dir.path(), bar_text());
+  LiveSession session = session_of(dir.path(), live_bar_text());
   const auto refused = [&](const LiveToolSpec& spec, const std::string& field) {
     try {
       session.begin_tool(spec);

@@ -41,9 +41,6 @@ class LiveClock {
   // At the tick's end: the wall seconds of the tick's work, and of advance's part of it.
   void tick_done(double work_s, double advance_s) { overhead_s_ = std::max(0.0, work_s - advance_s); }
 
-  double tick_s() const { return tick_s_; }
-  double realtime_factor() const { return factor_; }
-
  private:
   double tick_s_, factor_;
   double owed_s_ = 0;      // simulated seconds owed to real time

@@ -192,6 +192,9 @@ struct Scenario {
 Scenario parse_scenario(const std::string& text, const std::filesystem::path& file, const std::filesystem::path& base_dir);
 // Reads and parses a scenario file (InputError naming it when it cannot be read).
 Scenario read_scenario_file(const std::filesystem::path& path);
+// The file's text, checked as read_scenario_file checks it (a readable file of at most 1 MiB), for a
+// caller that keeps the text too (a live session saves it with the user's tools).
+std::string read_scenario_text(const std::filesystem::path& path);
 
 // What the scenario reads and writes, as JSON for the pipeline (ctsurg-sim --describe): the model
 // kind, the input files it reads (grid, surface, tetmesh: model_inputs in scenario_model.h), the
