@@ -38,7 +38,7 @@ using bench::cube;
 using bench::cube_grab;
 using bench::material;
 
-void static_solve(benchmark::State& state, FemMaterialModel model) {
+void static_solve(benchmark::State& state, FemLaw model) {
   const int n = static_cast<int>(state.range(0));
   const auto pre = state.range(1) ? FemPreconditioner::incomplete_cholesky : FemPreconditioner::diagonal;
   const FemModel& m = cube(n, model);
@@ -68,7 +68,7 @@ void static_solve(benchmark::State& state, FemMaterialModel model) {
 // max_diff_mm against the Newton-CG solve of the same grab (CG tolerance 1e-12).
 void BM_FemStaticLinearFactorised(benchmark::State& state) {
   const int n = static_cast<int>(state.range(0));
-  const FemModel& m = cube(n, FemMaterialModel::linear);
+  const FemModel& m = cube(n, FemLaw::linear);
   const FemBoundaryConditions bc = cube_grab(m, 2.0);
   FemBoundaryConditions supports;
   supports.fixed_nodes = bc.fixed_nodes;
@@ -100,8 +100,8 @@ void BM_FemStaticLinearFactorised(benchmark::State& state) {
 }
 BENCHMARK(BM_FemStaticLinearFactorised)->Arg(9)->Arg(12)->Arg(14)->Arg(16)->Unit(benchmark::kMillisecond)->UseRealTime();
 
-void BM_FemStaticNeoHookean(benchmark::State& s) { static_solve(s, FemMaterialModel::neo_hookean); }
-void BM_FemStaticLinear(benchmark::State& s) { static_solve(s, FemMaterialModel::linear); }
+void BM_FemStaticNeoHookean(benchmark::State& s) { static_solve(s, FemLaw::neo_hookean); }
+void BM_FemStaticLinear(benchmark::State& s) { static_solve(s, FemLaw::linear); }
 BENCHMARK(BM_FemStaticNeoHookean)->ArgsProduct({{9, 12, 14, 16}, {0, 1}})->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_FemStaticLinear)->ArgsProduct({{9, 12, 14, 16}, {0, 1}})->Unit(benchmark::kMillisecond)->UseRealTime();
 
@@ -116,12 +116,12 @@ void BM_FemNeoHookeanGrabDirect(benchmark::State& state) {
   const int n = static_cast<int>(state.range(0));
   const double tol_mm = 1e-3 * static_cast<double>(state.range(1));
   const bool quadratic = state.range(2) == 2;
-  const FemModel& lin = cube(n, FemMaterialModel::neo_hookean);
+  const FemModel& lin = cube(n, FemLaw::neo_hookean);
   static std::map<int, std::unique_ptr<FemModel>> quadratic_models;
   auto& q = quadratic_models[n];
   if (quadratic && !q) {
     const auto box = fem_box_mesh({n, n, n}, {20, 20, 20});
-    q = std::make_unique<FemModel>(build_quadratic_fem_model(box.nodes, box.tets, material(FemMaterialModel::neo_hookean)));
+    q = std::make_unique<FemModel>(build_quadratic_fem_model(box.nodes, box.tets, material(FemLaw::neo_hookean)));
   }
   const FemModel& m = quadratic ? *q : lin;
   FemBoundaryConditions bc = cube_grab(m, 2.0);
@@ -161,7 +161,7 @@ BENCHMARK(BM_FemNeoHookeanGrabDirect)
 // Newton iterations and factorisations per step.
 void BM_FemImplicitStep(benchmark::State& state) {
   const int n = static_cast<int>(state.range(0));
-  const auto law = state.range(1) ? FemMaterialModel::corotational : FemMaterialModel::neo_hookean;
+  const auto law = state.range(1) ? FemLaw::corotational : FemLaw::neo_hookean;
   const FemModel& m = cube(n, law);
   FemBoundaryConditions bc = cube_grab(m, 0.0);
   FemImplicitOptions o;
@@ -196,7 +196,7 @@ void BM_FemExplicitStep(benchmark::State& state) {
   auto& slot = models[n];
   if (!slot) {
     const auto box = fem_box_mesh({n, n, 2 * n}, {20, 20, 40});
-    slot = std::make_unique<FemModel>(build_fem_model(box.nodes, box.tets, material(FemMaterialModel::neo_hookean)));
+    slot = std::make_unique<FemModel>(build_fem_model(box.nodes, box.tets, material(FemLaw::neo_hookean)));
   }
   const FemModel& m = *slot;
   FemDynamicsOptions o;
@@ -228,7 +228,7 @@ void BM_FemCantileverLinear(benchmark::State& state) {
   const double h = 2.0, L = 10 * h, E = 3e4;
   const auto box = fem_box_mesh({10 * n, n, n}, {L, h, h});
   FemMaterial m;
-  m.model = FemMaterialModel::linear;
+  m.law = FemLaw::linear;
   m.youngs_modulus = E;
   m.poisson_ratio = 0.3;
   const FemModel model = build_fem_model(box.nodes, box.tets, m);

@@ -56,7 +56,7 @@ const FemModel& column(int64_t tets) {
   if (!slot) {
     const int n = cells.at(tets);
     const auto box = fem_box_mesh({n, n, 2 * n}, {20, 20, 40});
-    slot = std::make_unique<FemModel>(build_fem_model(box.nodes, box.tets, material(FemMaterialModel::neo_hookean)));
+    slot = std::make_unique<FemModel>(build_fem_model(box.nodes, box.tets, material(FemLaw::neo_hookean)));
   }
   return *slot;
 }
@@ -87,7 +87,7 @@ BENCHMARK(BM_DeviceFemExplicitStep)
     ->Unit(benchmark::kMillisecond)->UseRealTime();
 
 void BM_FemStaticLinearCg(benchmark::State& state) {
-  const FemModel& m = bench::cube(static_cast<int>(state.range(0)), FemMaterialModel::linear);
+  const FemModel& m = bench::cube(static_cast<int>(state.range(0)), FemLaw::linear);
   const Backend backend = state.range(1) ? Backend::cuda : Backend::cpu;
   const FemBoundaryConditions bc = bench::cube_grab(m, 2.0);
   FemStaticReport rep;

@@ -33,7 +33,7 @@
 // `make -f scripts/Makefile demo`, or by bench/run.sh live). Cases: grid (heart_grab.yaml: the implicit
 // spring grid), explicit (heart_explicit_grab.yaml), fem_static (heart_fem_grab.yaml: Neo-Hookean static),
 // fem_dynamic (heart_fem_cut.yaml: Neo-Hookean explicit dynamics), fem_linear (heart_fem_grab.yaml with
-// material_law: linear, the FEM-speed work's fastest model within 1 mm, docs/accuracy.md), fem_local
+// material.law: linear, the FEM-speed work's fastest model within 1 mm, docs/accuracy.md), fem_local
 // (heart_fem_local.yaml: Neo-Hookean in a 20 mm local region), live (heart_live.yaml: the scenario
 // ctsurg-live opens, linear static, a frame per 1/40 s). Prints one markdown row per case
 // (--markdown: with the table's header). Exit 2 for bad arguments or inputs, 1 when a case fails.
@@ -76,7 +76,7 @@ constexpr std::array<double, 3> kCutFrom{25, -234, 615}, kCutTo{25, -234, 655}, 
 
 struct Case {
   std::string name, label, scenario;
-  std::string material_law;  // overrides model.material_law when not empty
+  std::string material_law;  // overrides material.law when not empty
 };
 
 const std::vector<Case> kCases = {
@@ -84,7 +84,7 @@ const std::vector<Case> kCases = {
     {"explicit", "explicit springs (heart_explicit_grab)", "heart_explicit_grab.yaml", ""},
     {"fem_static", "FEM Neo-Hookean static (heart_fem_grab)", "heart_fem_grab.yaml", ""},
     {"fem_dynamic", "FEM Neo-Hookean dynamic (heart_fem_cut)", "heart_fem_cut.yaml", ""},
-    {"fem_linear", "FEM linear static (heart_fem_grab, material_law: linear)", "heart_fem_grab.yaml", "linear"},
+    {"fem_linear", "FEM linear static (heart_fem_grab, material.law: linear)", "heart_fem_grab.yaml", "linear"},
     {"fem_local", "FEM Neo-Hookean static, 20 mm local region (heart_fem_local)", "heart_fem_local.yaml", ""},
     {"live", "FEM linear static, a frame per 1/40 s (heart_live: ctsurg-live's scenario)", "heart_live.yaml", ""},
 };
@@ -155,7 +155,7 @@ std::string live_text(const fs::path& file, const Case& c, int threads, const st
   YAML::Node root = YAML::LoadFile(file.string());
   root.remove("tools");
   root.remove("render");
-  if (!c.material_law.empty()) root["model"]["material_law"] = c.material_law;
+  if (!c.material_law.empty()) root["material"]["law"] = c.material_law;
   if (threads > 0) root["threads"] = threads;
   if (!backend.empty()) root["backend"] = backend;
   YAML::Emitter out;

@@ -32,7 +32,7 @@ const SpMat& stiffness(int n) {
   static std::map<int, std::unique_ptr<SpMat>> cache;
   auto& slot = cache[n];
   if (slot) return *slot;
-  const FemModel& m = bench::cube(n, FemMaterialModel::linear);
+  const FemModel& m = bench::cube(n, FemLaw::linear);
   std::vector<int> free(m.nodes.size(), -1);
   int count = 0;
   for (int32_t i = 0; i < m.node_count(); ++i)

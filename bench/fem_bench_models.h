@@ -15,16 +15,16 @@
 
 namespace ctsurg::sim::bench {
 
-inline FemMaterial material(FemMaterialModel model) {
+inline FemMaterial material(FemLaw model) {
   FemMaterial m;
-  m.model = model;
+  m.law = model;
   m.youngs_modulus = 3e4;
   m.poisson_ratio = 0.45;
   return m;
 }
 
 // The cube of n^3 cells, built once per (n, law) for the process.
-inline const FemModel& cube(int n, FemMaterialModel model) {
+inline const FemModel& cube(int n, FemLaw model) {
   static std::map<std::pair<int, int>, std::unique_ptr<FemModel>> models;
   auto& slot = models[{n, static_cast<int>(model)}];
   if (!slot) {

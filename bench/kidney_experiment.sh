@@ -24,14 +24,14 @@ cd "$WORK"
 "$BIN/ctsurg-tetmesh" -q grid.h5 tetmesh.h5
 PY=/usr/bin/python3
 
-# scenario NAME MODEL_YAML FORCE_N DURATION FRAME: the lower 15 % of the kidney (inferior pole) held, a
+# scenario NAME MODEL_YAML FORCE_N DURATION FRAME [LAW]: the lower 15 % of the kidney (inferior pole) held, a
 # lateral force on the 6 mm around the superior-medial surface point.
 scenario() {
   cat >"$1.yaml" <<YAML
 ctsurg_scenario: 1
 name: kidney $1
 model: $2
-material: {preset: kidney, damping_per_s: 60}
+material: {preset: kidney, damping_per_s: 60${6:+, law: $6}}
 fixed:
   - box_fraction: {min: [0, 0, 0], max: [1, 1, 0.15]}
 tools:
@@ -53,7 +53,7 @@ for f in "${FORCES[@]}"; do
     if [[ $law == grid ]]; then
       scenario "$law-$f" "{kind: spring_grid, grid: grid.h5, surface: surface.h5}" "$f" 1.5 0.5
     else
-      scenario "$law-$f" "{kind: fem, tetmesh: tetmesh.h5, surface: surface.h5, material_law: $law, solver: static}" "$f" 1 1
+      scenario "$law-$f" "{kind: fem, tetmesh: tetmesh.h5, surface: surface.h5, solver: static}" "$f" 1 1 "$law"
     fi
     start=$(date +%s.%N)
     if "$BIN/ctsurg-sim" -q "$law-$f.yaml" 2>"$law-$f.err"; then

@@ -159,15 +159,15 @@ int main(int argc, char** argv) {
     const ExplicitSpringModel ts = calibrated_tet_spring_model(tm, tissue);
     const double c = critical_time_step(ts).critical;
     row("explicit springs (tet edges)", name, c, bisect([&](double r) { return springs_stable(ts, r * c, fixed); }, 0.1, 4));
-    for (const FemMaterialModel law : {FemMaterialModel::linear, FemMaterialModel::neo_hookean}) {
+    for (const FemLaw law : {FemLaw::linear, FemLaw::neo_hookean}) {
       FemMaterial m;
-      m.model = law;
+      m.law = law;
       m.youngs_modulus = tissue.youngs_modulus_pa;
       m.poisson_ratio = tissue.poisson_ratio;
       m.density = tissue.density;
       const FemModel model = build_fem_model(b.nodes, b.tets, m);
       const double fc = fem_critical_time_step(model).critical;
-      row(law == FemMaterialModel::linear ? "FEM explicit, linear" : "FEM explicit, Neo-Hookean", name, fc,
+      row(law == FemLaw::linear ? "FEM explicit, linear" : "FEM explicit, Neo-Hookean", name, fc,
           bisect([&](double r) { return fem_stable(model, r * fc, fixed); }, 0.05, 1.0));
     }
   }

@@ -162,10 +162,10 @@ std::string scenario_text(const Spec& sp, const Config& c, bool single_frame = f
       << (sp.cantilever ? "surface_fem.h5" : "surface.h5") << "\n";
   if (c.model == "fem") {
     s << "  kind: fem\n  tetmesh: tetmesh.h5\n  surface: " << (sp.cantilever ? "surface_fem.h5" : "surface.h5")
-      << "\n  material_law: " << c.law << "\n  solver: " << c.solver << "\n";
+      << "\n  solver: " << c.solver << "\n";
     if (c.order == 2) s << "  elements: quadratic\n";
   }
-  s << "material:\n" << sp.material << "  damping_per_s: " << sp.damping << "\n" << sp.fixed << sp.tools;
+  s << "material:\n" << (c.model == "fem" ? "  law: " + c.law + "\n" : "") << sp.material << "  damping_per_s: " << sp.damping << "\n" << sp.fixed << sp.tools;
   // Frames of 1/60 s while the tool moves (a quasi-static solve each); dynamic runs go on to settle.
   double frame = sp.move_s > 0 ? 1.0 / 60 : c.dynamic() ? sp.settle_s / 40 : 0.1;
   const double duration = c.dynamic() ? sp.move_s + sp.settle_s : std::max(sp.move_s, frame);

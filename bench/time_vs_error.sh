@@ -55,8 +55,8 @@ if [[ $SCENARIOS == *heart* && -z ${QUICK:-} ]]; then
     d=$IN/heart/v$v
     cat >"$OUT/memory.yaml" <<EOF
 ctsurg_scenario: 1
-model: {kind: fem, tetmesh: $d/tetmesh.h5, surface: $d/surface.h5, material_law: $law, solver: static, elements: $elements}
-material: {preset: myocardium}
+model: {kind: fem, tetmesh: $d/tetmesh.h5, surface: $d/surface.h5, solver: static, elements: $elements}
+material: {law: $law, preset: myocardium}
 fixed:
   - box_fraction: {min: [0, 0, 0.85], max: [1, 1, 1]}
 tools:

@@ -335,9 +335,9 @@ std::string vessel_scenario(const Case& k) {
 
 std::string fem_scenario(const Case& k, const Config& c, const std::string& tetmesh) {
   std::ostringstream s;
-  s << "ctsurg_scenario: 1\nmodel:\n  kind: fem\n  tetmesh: " << tetmesh << "\n  material_law: " << c.law << "\n  solver: static\n";
+  s << "ctsurg_scenario: 1\nmodel:\n  kind: fem\n  tetmesh: " << tetmesh << "\n  solver: static\n";
   if (c.order == 2) s << "  elements: quadratic\n";
-  s << kMaterial << "fixed:\n  - label: 2\n" << tool_text(k, k.fem_radius);
+  s << kMaterial << "  law: " << c.law << "\nfixed:\n  - label: 2\n" << tool_text(k, k.fem_radius);
   const double frame = 1.0 / 60, duration = (k.load == "pull" ? kMoveS : 0.0) + frame;  // the last frame at full load
   s << "time:\n  duration_s: " << duration << "\noutput:\n  trajectory: unused.h5\n  frame_interval_s: " << frame << "\n";
   return s.str();

@@ -83,17 +83,19 @@ int main(int argc, char** argv) {
         bar.reset();
         for (const auto& note : report.notes) spdlog::info("sim: {}", note);
         const double rate = report.wall_s > 0 ? report.steps / report.wall_s : 0.0;
+        const std::string fixed = std::to_string(report.fixed) + " fixed" +
+                                  (report.partly_fixed ? ", " + std::to_string(report.partly_fixed) + " held in some axes" : "");
         if (s.model != ctsurg::sim::ModelKind::fem) {
-          spdlog::info("sim: {} particles ({} fixed), {} springs; dt {:.3g} s (critical {:.3g} s), {} steps in {:.2f} s ({:.0f} steps/s)",
-                       report.particles, report.fixed, report.springs, report.dt_s, report.critical_dt_s, report.steps, report.wall_s,
+          spdlog::info("sim: {} particles ({}), {} springs; dt {:.3g} s (critical {:.3g} s), {} steps in {:.2f} s ({:.0f} steps/s)",
+                       report.particles, fixed, report.springs, report.dt_s, report.critical_dt_s, report.steps, report.wall_s,
                        rate);
         } else if (s.fem_solver == ctsurg::sim::FemSolver::dynamic) {
-          spdlog::info("sim: {} nodes ({} fixed), {} tets; dt {:.3g} s (critical {:.3g} s), {} steps in {:.2f} s ({:.0f} steps/s)",
-                       report.particles, report.fixed, report.elements, report.dt_s, report.critical_dt_s, report.steps,
+          spdlog::info("sim: {} nodes ({}), {} tets; dt {:.3g} s (critical {:.3g} s), {} steps in {:.2f} s ({:.0f} steps/s)",
+                       report.particles, fixed, report.elements, report.dt_s, report.critical_dt_s, report.steps,
                        report.wall_s, rate);
         } else {
-          spdlog::info("sim: {} nodes ({} fixed), {} tets; static equilibrium per frame, {} Newton iterations in {:.2f} s",
-                       report.particles, report.fixed, report.elements, report.steps, report.wall_s);
+          spdlog::info("sim: {} nodes ({}), {} tets; static equilibrium per frame, {} Newton iterations in {:.2f} s",
+                       report.particles, fixed, report.elements, report.steps, report.wall_s);
         }
         if (report.springs_cut > 0) {
           spdlog::info("sim: {} {} cut, {} surface triangles removed", report.springs_cut,

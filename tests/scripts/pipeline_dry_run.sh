@@ -49,6 +49,14 @@ ls "$WORK"/out/*/mk/*.tmp* 2>/dev/null && fail "temporary fragment left behind"
 got=$(mk -n heart PATIENTS_DIR="$ROOT/data_samples/patients" OUT="$WORK/bundled" | grep -o 'ctsurg-[a-z]*' | sort -u | tr '\n' ' ')
 [[ "$got" == "ctsurg-grid ctsurg-import ctsurg-normalmap ctsurg-render ctsurg-sim ctsurg-surface ctsurg-tetmesh " ]] || fail "heart: [$got]"
 echo "ok: heart plan: $got"
+# make live on a clone where the demo has not run: it builds the heart's tet mesh and textured surface
+# (and the scenarios' fragments, from ctsurg-sim --describe) but simulates and renders nothing before
+# ctsurg-live; it used to fail with "No rule to make target .../tetmesh.h5".
+mk -n live DEMO_OUT="$WORK/live" > "$WORK/live.plan"
+got=$(grep -o 'ctsurg-[a-z]*' "$WORK/live.plan" | sort -u | tr '\n' ' ')
+[[ "$got" == "ctsurg-grid ctsurg-import ctsurg-live ctsurg-normalmap ctsurg-sim ctsurg-surface ctsurg-tetmesh " ]] || fail "live: [$got]"
+if grep -q 'ctsurg-sim -q\|ctsurg-render' "$WORK/live.plan"; then fail "live: a scenario is simulated or rendered"; fi
+echo "ok: live plan: $got"
 # The batch's other patients read ../shared/data: the kidney needs the tet mesh (FEM) and the table,
 # the head (a spring grid without pictures) neither a normal map nor a tet mesh nor a render, the abdomen
 # the tet mesh and its pictures only.

@@ -28,13 +28,16 @@ scenario() {
     echo "  kind: $kind"
     if [[ $kind == fem ]]; then
       echo "  tetmesh: tetmesh.h5"
-      echo "  material_law: linear"
       echo "  solver: static"
     else
       echo "  grid: grid.h5"
     fi
     [[ -n $surface ]] && echo "  surface: $surface"
-    echo "material: {preset: soft_tissue, damping_per_s: 20}"
+    if [[ $kind == fem ]]; then
+      echo "material: {law: linear, preset: soft_tissue, damping_per_s: 20}"
+    else
+      echo "material: {preset: soft_tissue, damping_per_s: 20}"
+    fi
     echo "fixed:"
     echo "  - box_fraction: {min: [0, 0, 0], max: [1, 1, 0.3]}"
     echo "tools:"

@@ -31,6 +31,7 @@
 // does not recapture. Other steps (a chunk's start or end, intervals above kMaxGraphSteps, debug
 // builds) are launched directly; debug builds synchronise after every launch.
 #include "fem_device_dynamics.h"
+#include "fem_element_view.h"
 
 #include "ctsurg/sim/base/cuda_support.cuh"
 #include "ctsurg/sim/base/device_reduction.cuh"
@@ -326,9 +327,8 @@ FemDeviceDynamics::FemDeviceDynamics(const FemModel& model, const std::vector<Re
   d.sphere.zero(d.stream);
   *d.status_host = Status{0, kNone, kNone, 0, 0, 0, 0, -1.0, 0, 0};
   d.status.upload(d.status_host.get(), 1, d.stream);
-  d.elements = {d.tets.data(), d.dm_inverse.data(), d.volume.data(), model.tet_count(),
-                static_cast<int32_t>(model.material.model), static_cast<Real>(model.lame.mu),
-                static_cast<Real>(model.lame.lambda)};
+  d.elements = fem_element_view<Real>(model, d.dm_inverse.data(), d.volume.data());
+  d.elements.tets = d.tets.data();
   d.chunk_key = d.key();
   d.stream.synchronize();  // the host arrays may go away after return
 }

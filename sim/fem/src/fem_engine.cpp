@@ -17,18 +17,19 @@
 namespace ctsurg::sim {
 namespace {
 
-// Per node: 1 when a support holds it, wholly or in some component (tools do not capture it).
-std::vector<uint8_t> fixed_flags(int32_t nodes, const FemBoundaryConditions& supports) {
-  std::vector<uint8_t> flags(static_cast<size_t>(nodes), 0);
+// Per node: the axes a support holds (bit a for axis a; kAllAxes: the whole node). Tools capture the
+// nodes not wholly held and act on their free axes (fem_tools.h).
+std::vector<uint8_t> held_axes(int32_t nodes, const FemBoundaryConditions& supports) {
+  std::vector<uint8_t> axes(static_cast<size_t>(nodes), 0);
   for (const int32_t n : supports.fixed_nodes) {
     if (n < 0 || n >= nodes) throw InputError("fem engine", "fixed", "node " + std::to_string(n) + " out of range");
-    flags[static_cast<size_t>(n)] = 1;
+    axes[static_cast<size_t>(n)] = kAllAxes;
   }
   for (const int32_t c : supports.fixed_components) {
     if (c < 0 || c >= 3 * nodes) throw InputError("fem engine", "fixed", "component " + std::to_string(c) + " out of range");
-    flags[static_cast<size_t>(c / 3)] = 1;
+    axes[static_cast<size_t>(c / 3)] |= static_cast<uint8_t>(1u << (c % 3));
   }
-  return flags;
+  return axes;
 }
 
 // For each surface vertex of `coupling` (slots 0..3: the corners of a tet, as tet_embedding.h ties them),
@@ -87,14 +88,15 @@ FemEngine::FemEngine(FemModel model, FemBoundaryConditions supports, EmbeddedSur
       origin_(origin),
       options_(options),
       backend_(backend),
-      holds_(model_, fixed_flags(model_.node_count(), supports_), options_.where, options_.note),
+      holds_(model_, held_axes(model_.node_count(), supports_), options_.where, options_.note),
       u_(model_.nodes.size(), 0.0),
       rest_real_(model_.nodes.begin(), model_.nodes.end()),
       positions_(rest_real_, std::vector<Real>(static_cast<size_t>(model_.node_count()), Real(1))) {
   counts_.nodes = model_.node_count();
   counts_.elements = model_.tet_count();
-  const std::vector<uint8_t> held = fixed_flags(model_.node_count(), supports_);
-  counts_.fixed = std::count(held.begin(), held.end(), uint8_t{1});
+  const std::vector<uint8_t> held = held_axes(model_.node_count(), supports_);
+  counts_.fixed = std::count(held.begin(), held.end(), kAllAxes);
+  counts_.partly_fixed = model_.node_count() - counts_.fixed - std::count(held.begin(), held.end(), uint8_t{0});
   supports_.prescribed_nodes.clear();
   supports_.prescribed_displacements.clear();
   if (model_.order == 2 && !surface_.empty()) quadratic_surface(model_, surface_.coupling(), quadratic_nodes_, quadratic_weights_);
@@ -196,7 +198,7 @@ void FemEngine::make_solvers() {
     }
     return;
   }
-  if (model_.material.model == FemMaterialModel::linear && model_.order == 1 && newton.linear_solve != FemLinearSolve::iterative &&
+  if (model_.material.law == FemLaw::linear && model_.order == 1 && newton.linear_solve != FemLinearSolve::iterative &&
       supports_hold) {
     FemLinearSolverOptions lo;
     lo.threads = options_.threads;
@@ -284,7 +286,7 @@ void FemEngine::split_nodes(const std::vector<int32_t>& tets, const std::vector<
   FemModel m = build_fem_model(nodes, tets, model_.material);
   m.frame_origin = model_.frame_origin;
   // A copy is held as its parent is: whole (fixed_nodes) or in single components (fixed_components).
-  std::vector<uint8_t> fixed = fixed_flags(n0, supports_);
+  std::vector<uint8_t> fixed = held_axes(n0, supports_);
   std::vector<uint8_t> whole(static_cast<size_t>(n0), 0), component(3 * static_cast<size_t>(n0), 0);
   for (const int32_t n : supports_.fixed_nodes) whole[static_cast<size_t>(n)] = 1;
   for (const int32_t c : supports_.fixed_components) component[static_cast<size_t>(c)] = 1;
@@ -339,7 +341,8 @@ void FemEngine::split_nodes(const std::vector<int32_t>& tets, const std::vector<
   rest_real_.assign(model_.nodes.begin(), model_.nodes.end());
   positions_ = ParticleState(rest_real_, std::vector<Real>(static_cast<size_t>(model_.node_count()), Real(1)));
   counts_.nodes = model_.node_count();
-  counts_.fixed = std::count(fixed.begin(), fixed.end(), uint8_t{1});
+  counts_.fixed = std::count(fixed.begin(), fixed.end(), kAllAxes);
+  counts_.partly_fixed = m.node_count() - counts_.fixed - std::count(fixed.begin(), fixed.end(), uint8_t{0});
   make_solvers();
   if (dynamics_) {
     dynamics_->restore_state(ru, rprev, t, steps_taken);

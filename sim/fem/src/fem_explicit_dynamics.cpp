@@ -1,6 +1,7 @@
 #include "ctsurg/sim/fem/fem_explicit_dynamics.h"
 
 #include "fem_cpu_kernels.h"
+#include "fem_element_view.h"
 #include "fem_device_dynamics.h"
 
 #include "ctsurg/core/error.h"
@@ -60,8 +61,7 @@ RuntimeError energy_growth_error(double before, double after, int interval, doub
 
 // The kernels' views of the model with Real copies of B and V.
 FemElementView<Real> element_view(const FemModel& model, const std::vector<Real>& dm_inverse, const std::vector<Real>& volume) {
-  return {model.tets.data(), dm_inverse.data(), volume.data(), model.tet_count(), static_cast<int32_t>(model.material.model),
-          static_cast<Real>(model.lame.mu), static_cast<Real>(model.lame.lambda)};
+  return fem_element_view<Real>(model, dm_inverse.data(), volume.data());
 }
 
 // fem_explicit_step_impl.h's coefficients of eq. 12 for step dt (s), mass damping (1/s), gravity (mm/s^2).

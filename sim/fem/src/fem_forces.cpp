@@ -1,6 +1,7 @@
 #include "ctsurg/sim/fem/fem_forces.h"
 
 #include "fem_cpu_kernels.h"
+#include "fem_element_view.h"
 
 #include "ctsurg/core/error.h"
 
@@ -31,9 +32,7 @@ void element_displacements(const FemModel& model, int32_t e, const std::vector<d
 int32_t fem_internal_forces(const FemModel& model, const std::vector<double>& displacements, std::vector<double>& forces,
                             int threads) {
   check_displacements(model, displacements, "fem forces");
-  const FemElementView<double> el{model.tets.data(), model.dm_inverse.data(), model.rest_volume.data(),
-                                  model.tet_count(), static_cast<int32_t>(model.material.model), model.lame.mu,
-                                  model.lame.lambda, model.order};
+  const FemElementView<double> el = fem_element_view(model);
   std::vector<double> corner(3 * static_cast<std::size_t>(model.nodes_per_element()) * static_cast<std::size_t>(model.tet_count()));
   forces.resize(displacements.size());
   return cpu::fem_forces(el, model.node_offsets.data(), model.node_corners.data(), model.node_count(),
@@ -43,13 +42,14 @@ int32_t fem_internal_forces(const FemModel& model, const std::vector<double>& di
 double fem_strain_energy(const FemModel& model, const std::vector<double>& displacements) {
   check_displacements(model, displacements, "fem strain energy");
   double energy = 0;
-  const int32_t id = static_cast<int32_t>(model.material.model);
+  const FemElementView<double> el = fem_element_view(model);
+  const bool needs_positive_j = fem_law_traits(el.materials[0].law).needs_positive_j;
   if (model.order == 2) {
     for (int32_t e = 0; e < model.tet_count(); ++e) {
       double ue[30];
       for (int a = 0; a < 10; ++a)
         for (int c = 0; c < 3; ++c) ue[3 * a + c] = displacements[3 * static_cast<std::size_t>(model.tets[10 * static_cast<std::size_t>(e) + a]) + c];
-      const double w = fem_quadratic_element_energy(id, model.lame.mu, model.lame.lambda, ue, &model.dm_inverse[9 * e], model.rest_volume[e]);
+      const double w = fem_quadratic_element_energy(el.material(e), ue, &model.dm_inverse[9 * e], model.rest_volume[e]);
       if (w >= 1e30) return HUGE_VAL;
       energy += w;
     }
@@ -59,8 +59,8 @@ double fem_strain_energy(const FemModel& model, const std::vector<double>& displ
     double ue[12], F[9];
     element_displacements(model, e, displacements, ue);
     fem_deformation_gradient(ue, &model.dm_inverse[9 * e], F);
-    if (id == kFemNeoHookean && !(det3(F) > 0)) return HUGE_VAL;
-    energy += model.rest_volume[e] * fem_energy_density(id, model.lame.mu, model.lame.lambda, F);
+    if (needs_positive_j && !(det3(F) > 0)) return HUGE_VAL;
+    energy += model.rest_volume[e] * fem_energy_density(el.material(e), F);
   }
   return energy;
 }
@@ -78,7 +78,7 @@ std::array<double, 9> fem_deformation_gradient(const FemModel& model, int32_t e,
 std::array<double, 9> fem_element_stress(const FemModel& model, int32_t e, const std::vector<double>& displacements) {
   const auto F = fem_deformation_gradient(model, e, displacements);
   std::array<double, 9> P{};
-  fem_first_piola(static_cast<int32_t>(model.material.model), model.lame.mu, model.lame.lambda, F.data(), P.data());
+  fem_first_piola(fem_element_view(model).material(e), F.data(), P.data());
   return P;
 }
 
@@ -88,8 +88,7 @@ std::array<double, 144> fem_element_stiffness(const FemModel& model, int32_t e, 
   double ue[12];
   element_displacements(model, e, displacements, ue);
   std::array<double, 144> K{};
-  fem_element_stiffness(static_cast<int32_t>(model.material.model), model.lame.mu, model.lame.lambda, ue,
-                        &model.dm_inverse[9 * e], model.rest_volume[e], K.data());
+  fem_element_stiffness(fem_element_view(model).material(e), ue, &model.dm_inverse[9 * e], model.rest_volume[e], K.data());
   return K;
 }
 

@@ -63,7 +63,7 @@ bool quadratic_stiffness(const FemElementView<double>& el, const double* u, int3
     fem_quadratic_point(q, l);
     fem_quadratic_gradients(B, l, G);
     fem_quadratic_deformation_gradient(ue, G, F);
-    if (!fem_material_tangent(el.model, el.mu, el.lambda, F, A)) {
+    if (!fem_material_tangent(el.material(e), F, A)) {
       for (int i = 0; i < 900; ++i) K[i] = 0;
       return false;
     }
@@ -77,12 +77,13 @@ bool quadratic_stiffness(const FemElementView<double>& el, const double* u, int3
 
 int32_t fem_stiffness(const FemElementView<double>& el, const double* u, double* k, int threads, bool project) {
   const int t = thread_count(threads, el.count / 8);
-  const bool projecting = project && (el.model == kFemStvk || el.model == kFemNeoHookean);
+  // Only elements whose law's tangent may be indefinite are projected.
+  const auto projecting_material = [&](int32_t e) { return project && fem_law_traits(el.material(e).law).indefinite_tangent; };
   int32_t first = INT32_MAX;
   if (el.order == 2) {
 #pragma omp parallel for schedule(static) num_threads(t) reduction(min : first)
     for (int32_t e = 0; e < el.count; ++e)
-      if (!quadratic_stiffness(el, u, e, projecting, k + 900 * static_cast<int64_t>(e)) && e < first) first = e;
+      if (!quadratic_stiffness(el, u, e, projecting_material(e), k + 900 * static_cast<int64_t>(e)) && e < first) first = e;
     return first == INT32_MAX ? -1 : first;
   }
 #pragma omp parallel for schedule(static) num_threads(t) reduction(min : first)
@@ -93,12 +94,12 @@ int32_t fem_stiffness(const FemElementView<double>& el, const double* u, double*
     const double* B = el.dm_inverse + 9 * e;
     double* K = k + 144 * static_cast<int64_t>(e);
     fem_deformation_gradient(ue, B, F);
-    if (!fem_material_tangent(el.model, el.mu, el.lambda, F, A)) {
+    if (!fem_material_tangent(el.material(e), F, A)) {
       for (int i = 0; i < 144; ++i) K[i] = 0;
       if (e < first) first = e;
       continue;
     }
-    if (projecting) project_tangent_psd(A);
+    if (projecting_material(e)) project_tangent_psd(A);
     fem_shape_gradients(B, g);
     fem_stiffness_from_tangent(A, g, el.volume[e], K);
   }
@@ -115,14 +116,14 @@ double fem_strain_energy(const FemElementView<double>& el, const double* u, doub
       double ue[30];
       for (int a = 0; a < 10; ++a)
         for (int c = 0; c < 3; ++c) ue[3 * a + c] = u[3 * el.tets[10 * e + a] + c];
-      w = fem_quadratic_element_energy(el.model, el.mu, el.lambda, ue, B, el.volume[e]);
+      w = fem_quadratic_element_energy(el.material(e), ue, B, el.volume[e]);
     } else {
       double ue[12], F[9];
       for (int a = 0; a < 4; ++a)
         for (int c = 0; c < 3; ++c) ue[3 * a + c] = u[3 * el.tets[4 * e + a] + c];
       fem_deformation_gradient(ue, B, F);
-      const bool needs_positive_j = el.model == kFemNeoHookean || el.model == kFemCorotational;
-      w = needs_positive_j && !(det3(F) > 0) ? 1e30 : el.volume[e] * fem_energy_density(el.model, el.mu, el.lambda, F);
+      const bool needs_positive_j = fem_law_traits(el.material(e).law).needs_positive_j;
+      w = needs_positive_j && !(det3(F) > 0) ? 1e30 : el.volume[e] * fem_energy_density(el.material(e), F);
     }
     element_energy[e] = w >= 1e30 ? HUGE_VAL : w;
   }

@@ -2,6 +2,7 @@
 
 #include "ctsurg/sim/base/parallel.h"
 #include "fem_cpu_kernels.h"
+#include "fem_element_view.h"
 #include "fem_rigid_modes.h"
 #include "sparse_cholesky.h"
 
@@ -57,7 +58,7 @@ struct FemLinearStaticSolver::Impl {
     const int32_t n = m.node_count();
     if (m.order != 1)
       throw InputError(kWhere, "order", "the condensed solver is for linear tets; quadratic ones solve with solve_fem_static");
-    if (m.material.model != FemMaterialModel::linear)
+    if (m.material.law != FemLaw::linear)
       throw InputError(kWhere, "material", "the factorised solver is for the linear material only (its K is constant); use solve_fem_static for St. Venant-Kirchhoff or Neo-Hookean");
     if (!supports.prescribed_nodes.empty() || !supports.prescribed_displacements.empty())
       throw InputError(kWhere, "prescribed_nodes", "supports are fixed nodes and components only; pass grabs to solve()");
@@ -89,8 +90,7 @@ struct FemLinearStaticSolver::Impl {
     // K at u = 0 (the linear material's tangent is its stiffness) from the element matrices.
     std::vector<double> kbuf(144 * static_cast<std::size_t>(m.tet_count()));
     const std::vector<double> zero(3 * static_cast<std::size_t>(n), 0.0);
-    const FemElementView<double> el{m.tets.data(), m.dm_inverse.data(), m.rest_volume.data(), m.tet_count(),
-                                    static_cast<int32_t>(m.material.model), m.lame.mu, m.lame.lambda};
+    const FemElementView<double> el = fem_element_view(m);
     cpu::fem_stiffness(el, zero.data(), kbuf.data(), threads);
     std::vector<int32_t> support_row_of(supported.size(), -1);
     for (std::size_t r = 0; r < support_rows.size(); ++r) support_row_of[support_rows[r]] = static_cast<int32_t>(r);
@@ -203,8 +203,9 @@ struct FemLinearStaticSolver::Impl {
       if (i < 0 || i >= n) throw InputError(kWhere, "prescribed_nodes", "node id " + std::to_string(i) + " out of range [0, " + std::to_string(n) + ")");
       if (grabbed[i]) throw InputError(kWhere, "prescribed_nodes", "node " + std::to_string(i) + " is listed twice");
       const bool used = model.node_offsets[i + 1] > model.node_offsets[i];
-      if (used && (supported[3 * i] || supported[3 * i + 1] || supported[3 * i + 2]))
-        throw InputError(kWhere, "prescribed_nodes", "node " + std::to_string(i) + " is held by a support; a grab cannot move it");
+      // A node held in some axes is grabbed in the others (its held components are not in p below).
+      if (used && supported[3 * i] && supported[3 * i + 1] && supported[3 * i + 2])
+        throw InputError(kWhere, "prescribed_nodes", "node " + std::to_string(i) + " is held by a support in every axis; a grab cannot move it");
       grabbed[i] = 1;
     }
     if (!loads.forces.empty() && loads.forces.size() != n3)

@@ -148,7 +148,7 @@ struct FemLocalRegionSolver::Impl {
       throw InputError(kWhere, "balance_tolerance_mm", "must be a positive number of mm");
     if (model.order != 1) throw InputError(kWhere, "order", "the local region runs on linear (4-node) tets only");
     if (!supports.prescribed_nodes.empty()) throw InputError(kWhere, "prescribed_nodes", "supports hold nodes at zero; grabs come with each solve");
-    linear_model.material.model = FemMaterialModel::linear;
+    linear_model.material.law = FemLaw::linear;
     global = std::make_unique<FemLinearStaticSolver>(linear_model, supports, options.linear);
     const size_t n = static_cast<size_t>(model.node_count());
     whole.assign(n, 0);
@@ -251,7 +251,7 @@ struct FemLocalRegionSolver::Impl {
     sub = std::make_unique<FemModel>(sub_model(model, tets, sub_to_global, global_to_sub));
     newton = std::make_unique<FemStaticSolver>(*sub, options.newton, backend);
     sub_linear = std::make_unique<FemModel>(*sub);
-    sub_linear->material.model = FemMaterialModel::linear;
+    sub_linear->material.law = FemLaw::linear;
     std::vector<int32_t> ring_tets;
     for (const int32_t i : interface)
       for (int32_t k = model.node_offsets[static_cast<size_t>(i)]; k < model.node_offsets[static_cast<size_t>(i) + 1]; ++k)
@@ -264,7 +264,7 @@ struct FemLocalRegionSolver::Impl {
       ring_in = sub_model(model, inside, ring_in_to_global, global_to_ring);
       for (const int32_t g : ring_in_to_global) global_to_ring[static_cast<size_t>(g)] = -1;
       ring_out = sub_model(model, outside, ring_to_global, global_to_ring);
-      ring_out.material.model = FemMaterialModel::linear;
+      ring_out.material.law = FemLaw::linear;
     }
   }
 

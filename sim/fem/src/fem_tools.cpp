@@ -8,24 +8,24 @@
 namespace ctsurg::sim {
 
 std::vector<int32_t> free_nodes_in_sphere(const FemModel& model, const std::vector<double>& u,
-                                          const std::vector<uint8_t>& fixed, const Vec3& centre, double radius) {
+                                          const std::vector<uint8_t>& held_axes, const Vec3& centre, double radius) {
   const int64_t nn = model.node_count();
   if (u.size() != static_cast<size_t>(3 * nn)) throw InputError("fem tools", "displacements", "expected #N x 3");
-  if (fixed.size() != static_cast<size_t>(nn)) throw InputError("fem tools", "fixed", "expected one flag per node");
+  if (held_axes.size() != static_cast<size_t>(nn)) throw InputError("fem tools", "fixed", "expected one mask per node");
   const std::vector<double>& rest = model.nodes;
   std::vector<int32_t> ids;
   for (int64_t i = 0; i < nn; ++i) {
     double d = 0;
     for (size_t a = 0; a < 3; ++a) d += std::pow(rest[static_cast<size_t>(3 * i) + a] + u[static_cast<size_t>(3 * i) + a] - centre[a], 2);
-    if (d < radius * radius && !fixed[static_cast<size_t>(i)]) ids.push_back(static_cast<int32_t>(i));
+    if (d < radius * radius && held_axes[static_cast<size_t>(i)] != kAllAxes) ids.push_back(static_cast<int32_t>(i));
   }
   return ids;
 }
 
-FemToolHolds::FemToolHolds(const FemModel& model, std::vector<uint8_t> fixed, std::string where,
+FemToolHolds::FemToolHolds(const FemModel& model, std::vector<uint8_t> held_axes, std::string where,
                            std::function<void(const std::string&)> note)
-    : model_(model), fixed_(std::move(fixed)), where_(std::move(where)), note_(std::move(note)) {
-  if (fixed_.size() != static_cast<size_t>(model_.node_count())) throw InputError("fem tools", "fixed", "expected one flag per node");
+    : model_(model), held_axes_(std::move(held_axes)), where_(std::move(where)), note_(std::move(note)) {
+  if (held_axes_.size() != static_cast<size_t>(model_.node_count())) throw InputError("fem tools", "fixed", "expected one mask per node");
 }
 
 FemToolHolds::Hold& FemToolHolds::hold(size_t tool) {
@@ -34,11 +34,11 @@ FemToolHolds::Hold& FemToolHolds::hold(size_t tool) {
 }
 
 void FemToolHolds::nodes_added(const std::vector<int32_t>& parents) {
-  for (const int32_t p : parents) fixed_.push_back(fixed_.at(static_cast<size_t>(p)));
-  if (!nodal_forces_.empty()) nodal_forces_.resize(3 * fixed_.size(), 0.0);
-  if (fixed_.size() != static_cast<size_t>(model_.node_count())) {
+  for (const int32_t p : parents) held_axes_.push_back(held_axes_.at(static_cast<size_t>(p)));
+  if (!nodal_forces_.empty()) nodal_forces_.resize(3 * held_axes_.size(), 0.0);
+  if (held_axes_.size() != static_cast<size_t>(model_.node_count())) {
     throw RuntimeError("fem tools: the model has " + std::to_string(model_.node_count()) + " nodes after a cut, the tools know " +
-                       std::to_string(fixed_.size()));
+                       std::to_string(held_axes_.size()));
   }
 }
 
@@ -69,7 +69,7 @@ void FemToolHolds::update_grabs(const std::vector<ToolInput>& tools, double t, c
     if (g.nodes.empty() && !g.released && tool.active) {
       const double when = capture_at_start ? tool.start_s : t;
       const Vec3& centre = capture_at_start ? tool.start_centre : tool.centre;
-      g.nodes = free_nodes_in_sphere(model_, u, fixed_, centre, tool.radius_mm);
+      g.nodes = free_nodes_in_sphere(model_, u, held_axes_, centre, tool.radius_mm);
       if (g.nodes.empty()) {
         throw InputError(where_, tool.label, "grabs no free node at t = " + std::to_string(when) +
                                                  " s; move it onto the tissue or set snap_to_tissue: true");
@@ -87,7 +87,11 @@ void FemToolHolds::update_grabs(const std::vector<ToolInput>& tools, double t, c
     }
     for (size_t k = 0; k < g.nodes.size(); ++k) {
       nodes.push_back(g.nodes[k]);
-      for (size_t a = 0; a < 3; ++a) displacements.push_back(g.captured_u[3 * k + a] + tool.centre[a] - g.captured_at[a]);
+      const uint8_t held = held_axes_[static_cast<size_t>(g.nodes[k])];
+      for (size_t a = 0; a < 3; ++a) {
+        // A held axis stays where its support holds it (0); the grab moves the free ones.
+        displacements.push_back((held >> a) & 1u ? 0.0 : g.captured_u[3 * k + a] + tool.centre[a] - g.captured_at[a]);
+      }
     }
   }
   // A node that two grabs hold follows the later one (listed once: the solvers take a node set).
@@ -111,7 +115,7 @@ bool FemToolHolds::update_forces(const std::vector<ToolInput>& tools, const std:
     if (tool.kind != ToolKind::force) continue;
     Hold& f = hold(i);
     if (f.nodes.empty() && !f.released && tool.active) {
-      f.nodes = free_nodes_in_sphere(model_, u, fixed_, capture_at_start ? tool.start_centre : tool.centre, tool.radius_mm);
+      f.nodes = free_nodes_in_sphere(model_, u, held_axes_, capture_at_start ? tool.start_centre : tool.centre, tool.radius_mm);
       if (f.nodes.empty()) {
         throw InputError(where_, tool.label,
                          "the force's sphere holds no free node; move it onto the tissue or set snap_to_tissue: true");
@@ -131,9 +135,14 @@ bool FemToolHolds::update_forces(const std::vector<ToolInput>& tools, const std:
     if (tools[i].kind != ToolKind::force || !engaged(i)) continue;
     const Hold& f = holds_[i];
     if (nodal_forces_.empty()) nodal_forces_.assign(static_cast<size_t>(3 * model_.node_count()), 0.0);
-    const double share = 1e6 / static_cast<double>(f.nodes.size());  // N -> uN
-    for (const int32_t n : f.nodes) {
-      for (size_t a = 0; a < 3; ++a) nodal_forces_[static_cast<size_t>(3 * n) + a] += tools[i].force_n[a] * share;
+    for (size_t a = 0; a < 3; ++a) {
+      // The component along axis a is shared by the nodes free in a (all of them unless some are held in a).
+      size_t free_in_a = 0;
+      for (const int32_t n : f.nodes) free_in_a += (held_axes_[static_cast<size_t>(n)] >> a) & 1u ? 0 : 1;
+      if (free_in_a == 0) continue;
+      const double share = 1e6 / static_cast<double>(free_in_a);  // N -> uN
+      for (const int32_t n : f.nodes)
+        if (!((held_axes_[static_cast<size_t>(n)] >> a) & 1u)) nodal_forces_[static_cast<size_t>(3 * n) + a] += tools[i].force_n[a] * share;
     }
   }
   return true;

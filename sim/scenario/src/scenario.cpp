@@ -4,6 +4,7 @@
 #include "ctsurg/core/input_file.h"
 #include "ctsurg/sim/scenario/scenario_model.h"
 #include "ctsurg/sim/springs/suture.h"
+#include "scenario_material.h"
 #include "yaml_field.h"
 
 #include <nlohmann/json.hpp>
@@ -297,7 +298,7 @@ std::string describe_scenario(const Scenario& s) {
   j["name"] = s.name;
   j["model"] = to_string(s.model);
   if (s.model == ModelKind::fem) {
-    j["material_law"] = fem_material_model_name(s.material_law);
+    j["material_law"] = fem_law_name(s.material_law);
     j["solver"] = s.fem_solver == FemSolver::dynamic ? "dynamic" : s.fem_solver == FemSolver::implicit ? "implicit" : "static";
     j["elements"] = s.fem_order == 2 ? "quadratic" : "linear";
   }
@@ -364,16 +365,11 @@ static Scenario parse_fields(const std::string& text, const fs::path& file, cons
     m.child("centerline").fail("only for kind: vessel");
   }
   if ((s.model != ModelKind::fem && s.model != ModelKind::vessel) || m.has("grid")) s.grid = resolve(base_dir, m.child("grid").text());
-  if (m.has("material_law") || m.has("solver")) {
-    if (s.model != ModelKind::fem) m.child(m.has("solver") ? "solver" : "material_law").fail("only for kind: fem");
-  }
   if (m.has("material_law")) {
-    const std::string law = m.child("material_law").one_of({"linear", "stvk", "neo_hookean", "corotational"});
-    s.material_law = law == "linear"         ? FemMaterialModel::linear
-                     : law == "stvk"         ? FemMaterialModel::stvk
-                     : law == "corotational" ? FemMaterialModel::corotational
-                                             : FemMaterialModel::neo_hookean;
+    m.child("material_law").fail("the law moved to the material section: write `material: {law: " + m.child("material_law").text() +
+                                 ", ...}` (docs/sim.md, \"Materials\")");
   }
+  if (m.has("solver") && s.model != ModelKind::fem) m.child("solver").fail("only for kind: fem");
   if (m.has("solver")) {
     const std::string solver = m.child("solver").one_of({"dynamic", "static", "implicit"});
     s.fem_solver = solver == "static" ? FemSolver::static_equilibrium : solver == "implicit" ? FemSolver::implicit : FemSolver::dynamic;
@@ -405,25 +401,7 @@ static Scenario parse_fields(const std::string& text, const fs::path& file, cons
     s.close_cuts = m.child("close_cuts").boolean();
   }
 
-  const YamlField mat = top.child("material");
-  mat.only({"preset", "youngs_modulus_pa", "poisson_ratio", "density_g_per_cm3", "damping_per_s", "stiffness_damping_s"});
-  s.material = mat.has("preset") ? material_preset(mat.child("preset").text(), name, mat.child("preset").path())
-                                 : Material{"custom", 0, 0.45, 1.06e-3, "scenario"};
-  if (mat.has("youngs_modulus_pa")) s.material.youngs_modulus_pa = mat.child("youngs_modulus_pa").positive();
-  if (mat.has("poisson_ratio")) s.material.poisson_ratio = mat.child("poisson_ratio").number();
-  if (mat.has("density_g_per_cm3")) s.material.density = mat.child("density_g_per_cm3").positive() * 1e-3;
-  if (!mat.has("preset") && !mat.has("youngs_modulus_pa")) mat.fail("give a preset or youngs_modulus_pa");
-  if (mat.has("youngs_modulus_pa") || mat.has("poisson_ratio") || mat.has("density_g_per_cm3")) {
-    s.material.source = mat.has("preset") ? s.material.name + " preset with values from the scenario" : "scenario";
-    if (!mat.has("preset")) s.material.name = "custom";
-  }
-  validate_material(s.material, name);
-  if (mat.has("damping_per_s")) s.damping_per_s = mat.child("damping_per_s").non_negative();
-  if (mat.has("stiffness_damping_s")) {
-    if (s.model != ModelKind::fem || s.fem_solver != FemSolver::implicit)
-      mat.child("stiffness_damping_s").fail("only for kind: fem with solver: implicit (Rayleigh stiffness damping)");
-    s.stiffness_damping_s = mat.child("stiffness_damping_s").non_negative();
-  }
+  parse_material_section(top.child("material"), s);
 
   if (s.model == ModelKind::vessel) {
     const YamlField v = top.child("vessel");

@@ -16,6 +16,7 @@
 #include "ctsurg/sim/springs/spring_engine.h"
 #include "ctsurg/sim/surface/embedded_surface.h"
 #include "ctsurg/sim/surface/tet_embedding.h"
+#include "scenario_material.h"
 #include "ctsurg/sim/vessel/vessel_engine.h"
 #include "rest_bounds.h"
 
@@ -215,11 +216,7 @@ ScenarioEngine fem_engine(const Scenario& s, Backend backend, const std::functio
            std::to_string(b.tets_removed) + " tets taken out by the gap)");
     }
   }
-  FemMaterial material;
-  material.model = s.material_law;
-  material.youngs_modulus = s.material.youngs_modulus_pa;
-  material.poisson_ratio = s.material.poisson_ratio;
-  material.density = s.material.density;
+  const FemMaterial material = fem_material_of(s);
   FemModel model = s.fem_order == 2 ? build_quadratic_fem_model(mesh, material) : build_fem_model(mesh, material);
   model.frame_origin = {origin[0], origin[1], origin[2]};
   // Fixed regions: the rest positions in float (as the spring models select them), the fractions of
@@ -281,7 +278,7 @@ ScenarioEngine fem_engine(const Scenario& s, Backend backend, const std::functio
   }
   auto engine = std::make_unique<FemEngine>(std::move(model), std::move(supports), std::move(surface), origin, o, backend);
   if (crit && note) {
-    note("FEM " + std::string(fem_material_model_name(s.material_law)) + " explicit dynamics, dt " + std::to_string(engine->dt()) +
+    note("FEM " + std::string(fem_law_name(s.material_law)) + " explicit dynamics, dt " + std::to_string(engine->dt()) +
          " s (critical " + std::to_string(crit->critical) + " s, element " + std::to_string(crit->element) + ")");
   }
   r.engine = std::move(engine);

@@ -18,7 +18,7 @@ std::string model_label(const Scenario& s) {
       return s.springs_from == SpringSource::grid ? "explicit_springs (grid)" : "explicit_springs (tetmesh)";
     case ModelKind::vessel: return s.vessel.skinning == VesselSkinning::rmf ? "vessel (rmf)" : "vessel (spokes)";
     case ModelKind::fem:
-      return std::string("fem ") + fem_material_model_name(s.material_law) + (s.fem_order == 2 ? " quadratic" : "") +
+      return std::string("fem ") + fem_law_name(s.material_law) + (s.fem_order == 2 ? " quadratic" : "") +
              (s.fem_solver == FemSolver::dynamic ? " (dynamic)" : s.fem_solver == FemSolver::implicit ? " (implicit)" : " (static)");
   }
   return "?";

@@ -67,6 +67,7 @@ Trajectory run(const Scenario& s, ScenarioEngine built, RunReport& report, const
   const EngineCounts counts = engine.counts();
   report.particles = counts.nodes;
   report.fixed = counts.fixed;
+  report.partly_fixed = counts.partly_fixed;
   report.springs = counts.springs;
   report.elements = counts.elements;
   report.critical_dt_s = counts.critical_dt_s;

@@ -31,6 +31,10 @@ std::vector<YamlField> YamlField::items() const {
 }
 
 void YamlField::only(std::initializer_list<const char*> known) const {
+  only(std::vector<std::string>(known.begin(), known.end()));
+}
+
+void YamlField::only(const std::vector<std::string>& known) const {
   if (!node_.IsMap()) fail("expected a map (key: value pairs)");
   const std::set<std::string> k(known.begin(), known.end());
   for (const auto& kv : node_) {

@@ -32,6 +32,7 @@ class YamlField {
   std::vector<YamlField> items() const;              // a list's items, paths "path[i]"
   // Refuses keys that are not in `known` (a misspelt key would otherwise be silently ignored).
   void only(std::initializer_list<const char*> known) const;
+  void only(const std::vector<std::string>& known) const;
 
   std::string text() const;
   double number() const;                             // finite

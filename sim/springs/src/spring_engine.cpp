@@ -131,10 +131,17 @@ void SpringEngine::hold_components(std::vector<int32_t> components) {
   }
   held_components_ = std::move(components);
   counts_.fixed = std::count(state_.inv_mass.begin(), state_.inv_mass.end(), Real(0));
-  std::vector<uint8_t> any(static_cast<size_t>(state_.count()), 0);
-  for (const int32_t c : held_components_) any[static_cast<size_t>(c / 3)] = 1;
-  for (int32_t i = 0; i < state_.count(); ++i)
-    if (any[static_cast<size_t>(i)] && state_.inv_mass[static_cast<size_t>(i)] != Real(0)) ++counts_.fixed;
+  std::vector<uint8_t> axes(static_cast<size_t>(state_.count()), 0);
+  for (const int32_t c : held_components_) axes[static_cast<size_t>(c / 3)] |= static_cast<uint8_t>(1u << (c % 3));
+  counts_.partly_fixed = 0;
+  for (int32_t i = 0; i < state_.count(); ++i) {
+    if (!axes[static_cast<size_t>(i)] || state_.inv_mass[static_cast<size_t>(i)] == Real(0)) continue;
+    if (axes[static_cast<size_t>(i)] == 7) {
+      ++counts_.fixed;
+    } else {
+      ++counts_.partly_fixed;
+    }
+  }
 }
 
 StabilityReport SpringEngine::step(const std::vector<ToolInput>& tools, int steps) {

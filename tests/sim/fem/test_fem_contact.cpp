@@ -49,7 +49,7 @@ TwoBodies two_bodies() {
   TetMesh mesh = tet_mesh_of(fem_box_mesh({8, 2, 2}, {8, 2, 2}));
   TwoBodies b;
   b.faces_separated = separate_bodies(mesh, false, {HalfSpace{{4, 0, 0}, {1, 0, 0}}}).faces;
-  b.model = build_fem_model(mesh, test::fem_material(FemMaterialModel::neo_hookean, 3e4, 0.3));
+  b.model = build_fem_model(mesh, test::fem_material(FemLaw::neo_hookean, 3e4, 0.3));
   return b;
 }
 
@@ -107,7 +107,7 @@ TEST(FemContact, TwoBodiesPressedTogetherDoNotInterpenetrateAndKeepTheirVolumes)
 TEST(FemContact, TheLipsOfACrackPressedTogetherStayApart) {
   // A 6 x 2 x 4 mm bar held at x = 0 with a crack at x = 3 from its top down to z = 1 (one body still),
   // pushed towards the held end: the lips meet; with self-contact the right lip stays out of the left.
-  FemModel m0 = test::fem_box_model(FemMaterialModel::neo_hookean, {6, 2, 4}, {6, 2, 4}, 3e4, 0.3);
+  FemModel m0 = test::fem_box_model(FemLaw::neo_hookean, {6, 2, 4}, {6, 2, 4}, 3e4, 0.3);
   std::vector<int32_t> tets = m0.tets, parents;
   std::vector<double> nodes = m0.nodes;
   FemTetSeparation sep(m0);
@@ -151,7 +151,7 @@ TEST(FemContact, BodiesByLabelAndChecks) {
   const BodySeparation sep = separate_bodies(mesh, true, {});
   EXPECT_EQ(sep.faces, 2);
   EXPECT_EQ(sep.nodes_split, 4);  // the 2 x 2 nodes of the face between the labels
-  const FemModel m = build_fem_model(mesh, test::fem_material(FemMaterialModel::linear));
+  const FemModel m = build_fem_model(mesh, test::fem_material(FemLaw::linear));
   EXPECT_EQ(FemContact(m, FemContactOptions{true, true, 0, 4, 1, 0}).bodies(), 2);
   EXPECT_EQ(separate_bodies(mesh, false, {}).nodes_split, 0);
   // A gap: the slab's tets are taken out and the sides share no node.
@@ -160,7 +160,7 @@ TEST(FemContact, BodiesByLabelAndChecks) {
   EXPECT_EQ(g.tets_removed, 8);  // the tets of cells 3 and 4 whose centroids (x = 3.5, 3.75, 4.25, 4.5) are within 0.6 mm of x = 4
   EXPECT_EQ(g.nodes_split, 0);   // the tets left either side (centroids 3.25 and 4.75) share no node
   EXPECT_EQ(g.faces, 0);
-  EXPECT_EQ(FemContact(build_fem_model(gapped, test::fem_material(FemMaterialModel::linear)), FemContactOptions{true, true, 0, 4, 1, 0}).bodies(), 2);
+  EXPECT_EQ(FemContact(build_fem_model(gapped, test::fem_material(FemLaw::linear)), FemContactOptions{true, true, 0, 4, 1, 0}).bodies(), 2);
   EXPECT_THROW(separate_bodies(mesh, false, {HalfSpace{{0, 0, 0}, {0, 0, 0}}}), InputError);
   EXPECT_THROW(FemContact(m, FemContactOptions{true, true, -1, 4, 1, 0}), InputError);
   EXPECT_THROW(FemContact(m, FemContactOptions{true, true, 0, 0, 1, 0}), InputError);
@@ -175,7 +175,7 @@ FemModel two_cubes(const std::array<double, 3>& offset) {
     for (size_t a = 0; a < 3; ++a) mesh.nodes.push_back(mesh.nodes[3 * n + a] + offset[a]);
   for (size_t t = 0; t < tets; ++t) mesh.tets.push_back(mesh.tets[t] + static_cast<int32_t>(nodes));
   mesh.tet_labels.resize(mesh.tets.size() / 4, 1);
-  return build_fem_model(mesh, test::fem_material(FemMaterialModel::linear));
+  return build_fem_model(mesh, test::fem_material(FemLaw::linear));
 }
 
 // Inside or outside is decided by the other body's nearest feature. The second cube's corner at

@@ -28,7 +28,7 @@ std::array<Triangle, 2> plane_x(double x0, double lo = -50, double hi = 50) {
 }
 
 FemModel box(std::array<int, 3> cells = {6, 3, 3}, std::array<double, 3> size = {6, 3, 3}) {
-  return test::fem_box_model(FemMaterialModel::neo_hookean, cells, size, 3e4, 0.3);
+  return test::fem_box_model(FemLaw::neo_hookean, cells, size, 3e4, 0.3);
 }
 
 TEST(FemCutting, AThroughCutSplitsTheNodesOnTheCutAndKeepsEveryElement) {
@@ -132,7 +132,7 @@ TEST(FemCutting, ManyRandomCutsKeepAValidMeshAndAreDeterministic) {
   EXPECT_EQ(n1, n2);
   EXPECT_GT(n1, m.node_count());
   EXPECT_THROW(FemTetSeparation(build_quadratic_fem_model(fem_box_mesh({2, 1, 1}, {2, 1, 1}).nodes, fem_box_mesh({2, 1, 1}, {2, 1, 1}).tets,
-                                                          test::fem_material(FemMaterialModel::linear))),
+                                                          test::fem_material(FemLaw::linear))),
                InputError);
 }
 

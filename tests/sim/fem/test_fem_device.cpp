@@ -55,14 +55,14 @@ class FemDeviceTest : public ::testing::Test {
   }
 };
 
-FemModel box_model(FemMaterialModel material, std::array<int, 3> cells, std::array<double, 3> size) {
+FemModel box_model(FemLaw material, std::array<int, 3> cells, std::array<double, 3> size) {
   return test::fem_box_model(material, cells, size);
 }
 
 using test::nodes_where;
 
-const char* name(FemMaterialModel m) {
-  return m == FemMaterialModel::linear ? "linear" : m == FemMaterialModel::stvk ? "stvk" : "neo_hookean";
+const char* name(FemLaw m) {
+  return m == FemLaw::linear ? "linear" : m == FemLaw::stvk ? "stvk" : "neo_hookean";
 }
 
 // The tools of the 12 x 8 x 8 mm box: the x = 0 face fixed, the top edge of the x = 12 face grabbed
@@ -82,7 +82,7 @@ void lift_edge(FemExplicitDynamics& d, const FemModel& m, double lift) {
 }
 
 TEST_F(FemDeviceTest, ExplicitStepsMatchTheCpuStepByStep) {
-  for (auto material : {FemMaterialModel::linear, FemMaterialModel::stvk, FemMaterialModel::neo_hookean}) {
+  for (auto material : {FemLaw::linear, FemLaw::stvk, FemLaw::neo_hookean}) {
     const FemModel m = box_model(material, {6, 4, 4}, {12, 8, 8});
     FemDynamicsOptions o;
     o.gravity = {0, 0, -9810};
@@ -91,7 +91,7 @@ TEST_F(FemDeviceTest, ExplicitStepsMatchTheCpuStepByStep) {
       d->set_fixed_nodes(nodes_where(m, 0, 0.0));
       lift_edge(*d, m, 0.2);
     }
-    const double ulps = material == FemMaterialModel::neo_hookean ? kNeoHookeanStepUlps : kStepUlps;
+    const double ulps = material == FemLaw::neo_hookean ? kNeoHookeanStepUlps : kStepUlps;
     for (int k = 1; k <= 20; ++k) {
       cpu.step(1);
       gpu.step(1);
@@ -127,7 +127,7 @@ void run_with_tools(FemExplicitDynamics& d, const FemModel& m) {
 }
 
 TEST_F(FemDeviceTest, ThousandStepsWithGravityGrabAndSphereMatchTheCpu) {
-  for (auto material : {FemMaterialModel::linear, FemMaterialModel::stvk, FemMaterialModel::neo_hookean}) {
+  for (auto material : {FemLaw::linear, FemLaw::stvk, FemLaw::neo_hookean}) {
     const FemModel m = box_model(material, {6, 4, 4}, {12, 8, 8});
     FemDynamicsOptions o;
     o.gravity = {0, 0, -9810};
@@ -152,7 +152,7 @@ TEST_F(FemDeviceTest, ThousandStepsWithGravityGrabAndSphereMatchTheCpu) {
 // A node yanked through the beam: the element it inverts is reported with the CPU's message, and the
 // device keeps the state before the failing step (the second step of the call), as the CPU does.
 TEST_F(FemDeviceTest, InversionStopsWithTheCpuMessageAndKeepsTheStateBeforeIt) {
-  const FemModel m = box_model(FemMaterialModel::neo_hookean, {6, 2, 2}, {12, 4, 4});
+  const FemModel m = box_model(FemLaw::neo_hookean, {6, 2, 2}, {12, 4, 4});
   FemExplicitDynamics cpu(m, {}, Backend::cpu), gpu(m, {}, Backend::cuda);
   std::string messages[2];
   FemExplicitDynamics* runs[2] = {&cpu, &gpu};
@@ -189,7 +189,7 @@ TEST_F(FemDeviceTest, InversionStopsWithTheCpuMessageAndKeepsTheStateBeforeIt) {
 // allowed 1.5x, so both backends stop after step 32 (the device inside one call of 100 steps, in graph
 // replays).
 TEST_F(FemDeviceTest, EnergyGrowthStopsAtTheSameCheck) {
-  const FemModel m = box_model(FemMaterialModel::linear, {2, 2, 2}, {4, 4, 4});
+  const FemModel m = box_model(FemLaw::linear, {2, 2, 2}, {4, 4, 4});
   FemDynamicsOptions o;
   o.gravity = {0, 0, -9810};
   o.energy_growth = 1.5;
@@ -219,7 +219,7 @@ struct StaticProblem {
   FemBoundaryConditions bc;
 };
 
-StaticProblem grabbed_cube(FemMaterialModel material) {
+StaticProblem grabbed_cube(FemLaw material) {
   StaticProblem p{box_model(material, {5, 5, 5}, {10, 10, 10}), {}};
   for (int32_t i = 0; i < p.model.node_count(); ++i) {
     const double* x = &p.model.nodes[3 * i];
@@ -233,7 +233,7 @@ StaticProblem grabbed_cube(FemMaterialModel material) {
 }
 
 TEST_F(FemDeviceTest, StaticSolveWithTheDeviceCgMatchesTheCpu) {
-  for (auto material : {FemMaterialModel::linear, FemMaterialModel::neo_hookean}) {
+  for (auto material : {FemLaw::linear, FemLaw::neo_hookean}) {
     const StaticProblem p = grabbed_cube(material);
     FemStaticOptions o;
     o.cg_tolerance = 1e-12;
@@ -261,7 +261,7 @@ TEST_F(FemDeviceTest, StaticSolveWithTheDeviceCgMatchesTheCpu) {
 }
 
 TEST_F(FemDeviceTest, StaticSolveOnTheDeviceIsJacobiPreconditionedOnly) {
-  const StaticProblem p = grabbed_cube(FemMaterialModel::linear);
+  const StaticProblem p = grabbed_cube(FemLaw::linear);
   FemStaticOptions o;
   o.preconditioner = FemPreconditioner::incomplete_cholesky;
   try {

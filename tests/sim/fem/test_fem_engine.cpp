@@ -40,7 +40,7 @@ ToolInput grab_end(const Vec3& centre) {
   return g;
 }
 
-FemEngine static_engine(FemMaterialModel law, Backend backend, std::vector<std::string>* notes = nullptr) {
+FemEngine static_engine(FemLaw law, Backend backend, std::vector<std::string>* notes = nullptr) {
   FemModel m = test::fem_box_model(law, kCells, kSize);
   FemEngineOptions o;
   o.solver = FemSolver::static_equilibrium;
@@ -53,7 +53,7 @@ FemEngine static_engine(FemMaterialModel law, Backend backend, std::vector<std::
 
 TEST(FemEngine, QuasiStaticGrabHoldsTheGrabbedNodesAndTheSurfaceFollows) {
   std::vector<std::string> notes;
-  FemEngine e = static_engine(FemMaterialModel::neo_hookean, Backend::cpu, &notes);
+  FemEngine e = static_engine(FemLaw::neo_hookean, Backend::cpu, &notes);
   EXPECT_TRUE(e.quasi_static());
   EXPECT_EQ(e.dt(), 0.0);
   EXPECT_EQ(e.counts().nodes, 9 * 3 * 3);
@@ -79,13 +79,53 @@ TEST(FemEngine, QuasiStaticGrabHoldsTheGrabbedNodesAndTheSurfaceFollows) {
   EXPECT_NE(notes.back().find("grabbed 6 nodes at t = 0.000000 s"), std::string::npos) << notes.back();
 }
 
+// A node held in some axes only (a roller or symmetry-plane support) is still tissue a tool can hold:
+// a grab moves its free axes and a force loads them. The defect this guards against: the engine
+// marked any partly held node as fixed, so on a bar fixed at x = 0 with every node held in y, a force
+// at the free end was refused ("the force's sphere holds no free node") and a grab grabbed nothing.
+TEST(FemEngine, ToolsActOnTheFreeAxesOfPartlyHeldNodes) {
+  for (const FemLaw law : {FemLaw::linear, FemLaw::neo_hookean}) {  // the factorised linear solver and Newton
+    SCOPED_TRACE(fem_law_name(law));
+    const auto engine = [&] {
+      FemModel m = test::fem_box_model(law, kCells, kSize);
+      FemEngineOptions o;
+      o.solver = FemSolver::static_equilibrium;
+      o.where = "s.yaml";
+      FemBoundaryConditions supports;
+      supports.fixed_nodes = test::nodes_where(m, 0, 0.0);
+      for (int32_t n = 0; n < m.node_count(); ++n)
+        if (m.nodes[3 * static_cast<size_t>(n)] > 0) supports.fixed_components.push_back(3 * n + 1);  // y held
+      return FemEngine(std::move(m), std::move(supports), top_surface(), {0, 0, 0}, o, Backend::cpu);
+    };
+    FemEngine grabbed = engine();
+    EXPECT_EQ(grabbed.counts().fixed, 9);
+    EXPECT_EQ(grabbed.counts().partly_fixed, 9 * 3 * 3 - 9);
+    grabbed.equilibrium({grab_end({8, 2, 2})}, 0.5);  // up 1 mm and sideways 1 mm: only the lift is free
+    const int32_t tip = test::nodes_where(grabbed.model(), 0, 8.0)[4];  // (8, 1, 1)
+    EXPECT_NEAR(grabbed.displacements()[3 * static_cast<size_t>(tip) + 2], 1.0, 1e-12);
+    for (int32_t n = 0; n < grabbed.model().node_count(); ++n) EXPECT_EQ(grabbed.displacements()[3 * static_cast<size_t>(n) + 1], 0.0);
+
+    FemEngine pushed = engine();
+    ToolInput f;
+    f.kind = ToolKind::force;
+    f.label = "tools[0] (force)";
+    f.radius_mm = 1.01;
+    f.active = true;
+    f.centre = f.start_centre = {8, 1, 1};
+    f.force_n = {0, 0.01, 0.01};  // the y part meets held axes only: the supports take it
+    ASSERT_NO_THROW(pushed.equilibrium({f}, 0.5));
+    EXPECT_GT(pushed.displacements()[3 * static_cast<size_t>(tip) + 2], 0.01);
+    for (int32_t n = 0; n < pushed.model().node_count(); ++n) EXPECT_EQ(pushed.displacements()[3 * static_cast<size_t>(n) + 1], 0.0);
+  }
+}
+
 // The defect the single runner fixed: the FEM runner handed the scenario's backend to the surface's
 // host-array kernel, so every FEM scenario with a surface on backend cuda threw at its first frame. A
 // linear static engine solves on the CPU on every backend, so this runs without a GPU too.
 TEST(FemEngine, SurfaceFramesComeFromTheHostOnEveryBackend) {
   for (const Backend backend : {Backend::cpu, Backend::cuda}) {
     SCOPED_TRACE(backend_name(backend));
-    FemEngine e = static_engine(FemMaterialModel::linear, backend);
+    FemEngine e = static_engine(FemLaw::linear, backend);
     e.equilibrium({grab_end({8, 1, 2})}, 0.1);
     e.sync();
     std::vector<float> v;
@@ -96,7 +136,7 @@ TEST(FemEngine, SurfaceFramesComeFromTheHostOnEveryBackend) {
 }
 
 TEST(FemEngine, DynamicGrabMovesTheEndAndIdleStepsGoInBatches) {
-  FemModel m = test::fem_box_model(FemMaterialModel::neo_hookean, kCells, kSize);
+  FemModel m = test::fem_box_model(FemLaw::neo_hookean, kCells, kSize);
   FemEngineOptions o;
   o.solver = FemSolver::dynamic;
   o.mass_damping = 200;
@@ -134,7 +174,7 @@ TEST(FemEngine, DynamicGrabMovesTheEndAndIdleStepsGoInBatches) {
 // displacement of the last frame written: the rest state here, so the end jumped back up).
 TEST(FemEngine, DynamicGrabCapturesTheNodesWhereTheyAreNow) {
   const auto sagging = [] {
-    FemModel m = test::fem_box_model(FemMaterialModel::neo_hookean, kCells, kSize);
+    FemModel m = test::fem_box_model(FemLaw::neo_hookean, kCells, kSize);
     FemEngineOptions o;
     o.solver = FemSolver::dynamic;
     o.mass_damping = 500;
@@ -162,7 +202,7 @@ TEST(FemEngine, DynamicGrabCapturesTheNodesWhereTheyAreNow) {
 }
 
 TEST(FemEngine, WhatTheFemDoesNotTakeIsRefusedWithTheField) {
-  FemEngine e = static_engine(FemMaterialModel::linear, Backend::cpu);
+  FemEngine e = static_engine(FemLaw::linear, Backend::cpu);
   ToolInput blade;
   blade.kind = ToolKind::cut;
   blade.label = "tools[1] (cut)";
@@ -172,7 +212,7 @@ TEST(FemEngine, WhatTheFemDoesNotTakeIsRefusedWithTheField) {
     FemEngineOptions o;
     o.solver = FemSolver::static_equilibrium;
     o.where = "s.yaml";
-    FemModel q = build_quadratic_fem_model(box.nodes, box.tets, test::fem_material(FemMaterialModel::neo_hookean));
+    FemModel q = build_quadratic_fem_model(box.nodes, box.tets, test::fem_material(FemLaw::neo_hookean));
     FemBoundaryConditions supports;
     supports.fixed_nodes = test::nodes_where(q, 0, 0.0);
     FemEngine quadratic(std::move(q), std::move(supports), EmbeddedSurface(), {0, 0, 0}, o);
@@ -191,7 +231,7 @@ TEST(FemEngine, WhatTheFemDoesNotTakeIsRefusedWithTheField) {
   o.solver = FemSolver::static_equilibrium;
   o.where = "s.yaml";
   try {
-    FemEngine loose(test::fem_box_model(FemMaterialModel::linear, kCells, kSize), FemBoundaryConditions{}, EmbeddedSurface(), {0, 0, 0}, o);
+    FemEngine loose(test::fem_box_model(FemLaw::linear, kCells, kSize), FemBoundaryConditions{}, EmbeddedSurface(), {0, 0, 0}, o);
     ADD_FAILURE() << "a static run with nothing fixed was accepted";
   } catch (const InputError& err) {
     EXPECT_EQ(err.file(), "s.yaml");

@@ -19,7 +19,7 @@ namespace ctsurg::sim {
 namespace {
 
 FemModel beam(std::array<int, 3> cells = {6, 2, 2}, std::array<double, 3> size = {12, 4, 4}) {
-  return test::fem_box_model(FemMaterialModel::neo_hookean, cells, size, 3e4, 0.3);
+  return test::fem_box_model(FemLaw::neo_hookean, cells, size, 3e4, 0.3);
 }
 
 using test::nodes_where;
@@ -195,7 +195,7 @@ namespace {
 // steps 16 and 32 (v grows linearly), above an allowed growth of 1.5, so the run stops after step 32
 // with the message, the state finite.
 TEST(FemExplicitDynamics, EnergyGrowthAboveTheLimitStopsTheRun) {
-  const FemModel m = test::fem_box_model(FemMaterialModel::linear, {2, 2, 2}, {4, 4, 4}, 3e4, 0.3);
+  const FemModel m = test::fem_box_model(FemLaw::linear, {2, 2, 2}, {4, 4, 4}, 3e4, 0.3);
   FemDynamicsOptions o;
   o.gravity = {0, 0, -9810};
   o.energy_growth = 1.5;

@@ -15,10 +15,10 @@ namespace {
 
 using test::max_abs;
 
-FemModel block(FemMaterialModel model, std::array<int, 3> cells = {4, 3, 3}) {
+FemModel block(FemLaw model, std::array<int, 3> cells = {4, 3, 3}) {
   const auto box = fem_box_mesh(cells, {8.0, 6.0, 6.0}, {-4, -3, -3});
   FemMaterial m;
-  m.model = model;
+  m.law = model;
   m.youngs_modulus = 3e4;
   m.poisson_ratio = 0.45;
   return build_fem_model(box.nodes, box.tets, m);
@@ -42,27 +42,27 @@ std::vector<double> rigid_motion(const FemModel& m, double angle) {
 
 TEST(FemForces, LargeRigidRotationGivesNoForceForNonlinearModelsButSpuriousForLinear) {
   // A 90-degree rotation of an unloaded block. Force scale: E times a face area of ~4 mm^2 ~ 1e5 uN.
-  for (auto model : {FemMaterialModel::stvk, FemMaterialModel::neo_hookean, FemMaterialModel::corotational,
-                     FemMaterialModel::linear}) {
+  for (auto model : {FemLaw::stvk, FemLaw::neo_hookean, FemLaw::corotational,
+                     FemLaw::linear}) {
     const FemModel m = block(model);
     std::vector<double> f;
     EXPECT_EQ(fem_internal_forces(m, rigid_motion(m, M_PI / 2), f), -1);
     const double fmax = max_abs(f);
     const double energy = fem_strain_energy(m, rigid_motion(m, M_PI / 2));
-    if (model == FemMaterialModel::linear) {
+    if (model == FemLaw::linear) {
       EXPECT_GT(fmax, 1e4) << "linear: spurious forces of a rotation, max " << fmax << " uN";
       EXPECT_GT(energy, 1e5);
       std::cout << "linear elasticity under a 90-degree rigid rotation: max nodal force " << fmax
                 << " uN, strain energy " << energy << " nJ\n";
     } else {
-      EXPECT_LT(fmax, 1e-6) << fem_material_model_name(model);
-      EXPECT_LT(std::abs(energy), 1e-6) << fem_material_model_name(model);
+      EXPECT_LT(fmax, 1e-6) << fem_law_name(model);
+      EXPECT_LT(std::abs(energy), 1e-6) << fem_law_name(model);
     }
   }
 }
 
 TEST(FemForces, ElementStiffnessIsTheForceDerivative) {
-  for (auto model : {FemMaterialModel::linear, FemMaterialModel::stvk, FemMaterialModel::neo_hookean}) {
+  for (auto model : {FemLaw::linear, FemLaw::stvk, FemLaw::neo_hookean}) {
     const FemModel m = block(model, {1, 1, 1});
     std::vector<double> u = rigid_motion(m, 0.3);
     for (std::size_t d = 0; d < u.size(); ++d) u[d] += 0.2 * std::sin(1.7 * d + 0.3);  // a general deformation
@@ -94,7 +94,7 @@ TEST(FemForces, ElementStiffnessIsTheForceDerivative) {
       for (int r = 0; r < 12; ++r) {
         const double fd = -(fp[r] - fm[r]) / (2 * h);
         EXPECT_NEAR(K[r * 12 + c], fd, 1e-5 * std::max(1.0, std::abs(fd)) + 1e-3)
-            << fem_material_model_name(model) << " K(" << r << ", " << c << ")";
+            << fem_law_name(model) << " K(" << r << ", " << c << ")";
       }
     }
     for (int r = 0; r < 12; ++r)
@@ -103,7 +103,7 @@ TEST(FemForces, ElementStiffnessIsTheForceDerivative) {
 }
 
 TEST(FemForces, ForcesBalanceAndAreIdenticalForAnyThreadCount) {
-  const FemModel m = block(FemMaterialModel::neo_hookean, {10, 8, 8});
+  const FemModel m = block(FemLaw::neo_hookean, {10, 8, 8});
   std::vector<double> u(m.nodes.size());
   for (std::size_t d = 0; d < u.size(); ++d) u[d] = 0.1 * std::sin(0.37 * d);
   std::vector<double> f1, f2, f3;
@@ -119,7 +119,7 @@ TEST(FemForces, ForcesBalanceAndAreIdenticalForAnyThreadCount) {
 }
 
 TEST(FemForces, InvertedElementIsReportedAndGivesNoNaN) {
-  const FemModel m = block(FemMaterialModel::neo_hookean, {1, 1, 1});
+  const FemModel m = block(FemLaw::neo_hookean, {1, 1, 1});
   std::vector<double> u(m.nodes.size(), 0.0);
   u[3 * 7] = -30;  // drag the far corner through the block
   std::vector<double> f;

@@ -23,13 +23,13 @@ using test::max_abs_difference;
 
 using test::nodes_where;
 
-FemModel beam(FemMaterialModel law, double youngs_pa = 3e4, std::array<int, 3> cells = {6, 2, 2}) {
+FemModel beam(FemLaw law, double youngs_pa = 3e4, std::array<int, 3> cells = {6, 2, 2}) {
   return test::fem_box_model(law, cells, {12, 4, 4}, youngs_pa, 0.3);
 }
 
 TEST(FemImplicitDynamics, FreeFallIsExactForConstantAcceleration) {
   // A rigid translation strains nothing; backward Euler gives v_n = g h n, u_n = g h^2 n (n + 1) / 2.
-  for (auto law : {FemMaterialModel::linear, FemMaterialModel::neo_hookean, FemMaterialModel::corotational}) {
+  for (auto law : {FemLaw::linear, FemLaw::neo_hookean, FemLaw::corotational}) {
     const FemModel m = beam(law, 3e4, {2, 1, 1});
     FemImplicitOptions o;
     o.gravity = {0, 0, -9810};
@@ -38,7 +38,7 @@ TEST(FemImplicitDynamics, FreeFallIsExactForConstantAcceleration) {
     const double h = d.dt();
     const double expected = -9810 * h * h * 10 * 11 / 2;
     for (int32_t i = 0; i < m.node_count(); ++i) {
-      EXPECT_NEAR(d.displacements()[3 * i + 2], expected, 1e-6 * std::abs(expected)) << fem_material_model_name(law);
+      EXPECT_NEAR(d.displacements()[3 * i + 2], expected, 1e-6 * std::abs(expected)) << fem_law_name(law);
       EXPECT_NEAR(d.velocities()[3 * i + 2], -9810 * h * 10, 1e-6 * 9810 * h * 10);
       EXPECT_NEAR(d.displacements()[3 * i], 0, 1e-9);
     }
@@ -51,8 +51,8 @@ TEST(FemImplicitDynamics, FrameStepsSettleToTheStaticSolutionForEveryLaw) {
   // A cantilever sagging under gravity, steps of a frame (1/60 s, thousands of times the explicit
   // critical step): backward Euler's own damping settles it without Rayleigh damping, to the static
   // equilibrium of the same law.
-  for (auto law : {FemMaterialModel::linear, FemMaterialModel::stvk, FemMaterialModel::neo_hookean,
-                   FemMaterialModel::corotational}) {
+  for (auto law : {FemLaw::linear, FemLaw::stvk, FemLaw::neo_hookean,
+                   FemLaw::corotational}) {
     const FemModel m = beam(law);
     FemBoundaryConditions bc;
     bc.fixed_nodes = nodes_where(m, 0, 0.0);
@@ -70,9 +70,9 @@ TEST(FemImplicitDynamics, FrameStepsSettleToTheStaticSolutionForEveryLaw) {
     const double err = max_abs_difference(d.displacements(), stat.displacements);
     const double sag = max_abs(stat.displacements);
     std::printf("%s: 120 implicit steps of 1/60 s vs static: %.3g mm of a %.3g mm sag, %d Newton iterations, %d factorisations\n",
-                fem_material_model_name(law), err, sag, rep.newton_iterations, rep.factorizations);
+                fem_law_name(law), err, sag, rep.newton_iterations, rep.factorizations);
     EXPECT_GT(sag, 0.1);
-    EXPECT_LT(err, 1e-4 * sag) << fem_material_model_name(law);
+    EXPECT_LT(err, 1e-4 * sag) << fem_law_name(law);
     EXPECT_LT(d.kinetic_energy(), 1e-8 * d.strain_energy());
     EXPECT_EQ(rep.substeps, 1);
   }
@@ -106,20 +106,20 @@ std::vector<double> energies_after_release(const FemModel& m, double mass_dampin
 TEST(FemImplicitDynamics, FrameStepsOnStiffTissueAreStableAndTheEnergyOnlyDecays) {
   // 1 MPa (cartilage-like, 30 times the heart's stiffness): the explicit critical step is about 2 us;
   // a frame is 8,000 of them. After a release the total energy never grows (backward Euler dissipates).
-  for (auto law : {FemMaterialModel::linear, FemMaterialModel::neo_hookean, FemMaterialModel::corotational}) {
+  for (auto law : {FemLaw::linear, FemLaw::neo_hookean, FemLaw::corotational}) {
     const FemModel m = beam(law, 1e6);
     const auto e = energies_after_release(m, 0, 0, 30);
     for (std::size_t k = 1; k < e.size(); ++k)  // to round-off (1e-12 of the start)
-      EXPECT_LE(e[k], e[k - 1] * (1 + 1e-9) + 1e-12 * e[0]) << fem_material_model_name(law) << " step " << k;
-    EXPECT_LT(e.back(), 1e-3 * e.front()) << fem_material_model_name(law);
+      EXPECT_LE(e[k], e[k - 1] * (1 + 1e-9) + 1e-12 * e[0]) << fem_law_name(law) << " step " << k;
+    EXPECT_LT(e.back(), 1e-3 * e.front()) << fem_law_name(law);
     std::printf("%s, 1 MPa: energy %.3g nJ after release, %.3g after 1 step, %.3g after 30 steps of 1/60 s\n",
-                fem_material_model_name(law), e[0], e[1], e.back());
+                fem_law_name(law), e[0], e[1], e.back());
   }
 }
 
 TEST(FemImplicitDynamics, RayleighDampingRemovesEnergyFaster) {
   // A soft beam (3 kPa) whose first mode is slow enough (wh < 1) to ring under backward Euler alone.
-  const FemModel m = beam(FemMaterialModel::neo_hookean, 3e3);
+  const FemModel m = beam(FemLaw::neo_hookean, 3e3);
   const auto none = energies_after_release(m, 0, 0, 10);
   const auto mass = energies_after_release(m, 20, 0, 10);
   const auto stiff = energies_after_release(m, 0, 0.02, 10);
@@ -131,7 +131,7 @@ TEST(FemImplicitDynamics, RayleighDampingRemovesEnergyFaster) {
 }
 
 TEST(FemImplicitDynamics, AGrabIsHeldAtItsTargetAndComponentSupportsHoldOnlyTheirAxis) {
-  const FemModel m = beam(FemMaterialModel::neo_hookean);
+  const FemModel m = beam(FemLaw::neo_hookean);
   FemImplicitDynamics d(m);
   // The root on a roller in x only, plus what removes the remaining rigid motions.
   const auto root = nodes_where(m, 0, 0.0);
@@ -160,7 +160,7 @@ TEST(FemImplicitDynamics, AGrabIsHeldAtItsTargetAndComponentSupportsHoldOnlyThei
 }
 
 TEST(FemImplicitDynamics, AFailedStepIsRetriedInHalvesAndPastTheLimitLeavesTheState) {
-  const FemModel m = beam(FemMaterialModel::neo_hookean);
+  const FemModel m = beam(FemLaw::neo_hookean);
   const auto root = nodes_where(m, 0, 0.0);
   const auto tip = nodes_where(m, 0, 12.0);
   std::vector<double> target(3 * tip.size(), 0.0);
@@ -196,7 +196,7 @@ TEST(FemImplicitDynamics, AFailedStepIsRetriedInHalvesAndPastTheLimitLeavesTheSt
 }
 
 TEST(FemImplicitDynamics, OptionsOutOfRangeNameTheirField) {
-  const FemModel m = beam(FemMaterialModel::linear, 3e4, {2, 1, 1});
+  const FemModel m = beam(FemLaw::linear, 3e4, {2, 1, 1});
   const auto field_of = [&](const FemImplicitOptions& o) -> std::string {
     try {
       FemImplicitDynamics d(m, o);

@@ -21,7 +21,7 @@ namespace {
 using test::max_abs;
 using test::max_abs_difference;
 
-FemModel box_model(FemMaterialModel law = FemMaterialModel::linear) { return test::fem_box_model(law, {5, 5, 6}, {10, 10, 12}); }
+FemModel box_model(FemLaw law = FemLaw::linear) { return test::fem_box_model(law, {5, 5, 6}, {10, 10, 12}); }
 
 using test::nodes_where;
 
@@ -181,7 +181,7 @@ std::string field_of(const std::function<void()>& f) {
 TEST(FemLinearStaticSolver, BadInputIsRefusedWithTheField) {
   const FemModel m = box_model();
   const Case c = loaded_box(m);
-  const FemModel nh = box_model(FemMaterialModel::neo_hookean);
+  const FemModel nh = box_model(FemLaw::neo_hookean);
   EXPECT_EQ(field_of([&] { FemLinearStaticSolver s(nh, c.supports); }), "material");
   EXPECT_EQ(field_of([&] { FemLinearStaticSolver s(m, FemBoundaryConditions{}); }), "boundary conditions");
   FemBoundaryConditions with_grab = c.supports;

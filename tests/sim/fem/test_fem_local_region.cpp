@@ -22,7 +22,7 @@ namespace {
 const std::array<int, 3> kCells{8, 8, 4};
 const std::array<double, 3> kSize{16, 16, 8};
 
-FemModel block(FemMaterialModel law = FemMaterialModel::neo_hookean) { return test::fem_box_model(law, kCells, kSize); }
+FemModel block(FemLaw law = FemLaw::neo_hookean) { return test::fem_box_model(law, kCells, kSize); }
 
 FemBoundaryConditions base_fixed(const FemModel& m) {
   FemBoundaryConditions bc;
@@ -109,7 +109,7 @@ TEST(FemLocalRegion, ConvergesToTheFullNonlinearSolveAsTheRegionGrows) {
       EXPECT_NEAR(res.displacements[3 * static_cast<size_t>(grab[g]) + 2], 2.4, 1e-12);
     if (r == 5.0) {
       // Against the linear solve of the whole mesh: no worse with the smallest region.
-      const FemModel linear_model = block(FemMaterialModel::linear);  // the solver keeps a reference to it
+      const FemModel linear_model = block(FemLaw::linear);  // the solver keeps a reference to it
       FemLinearStaticSolver lin(linear_model, base_fixed(m));
       linear_error = test::max_abs_difference(lin.solve(grab, d, loads).displacements, full.displacements);
       EXPECT_LE(error, linear_error + 1e-6);
@@ -152,7 +152,7 @@ TEST(FemLocalRegion, ATinyLoadGivesTheLinearSolution) {
   const FemModel m = block();
   const std::vector<int32_t> grab = top_nodes_near(m, 8, 8);
   const std::vector<double> d = lifted(grab.size(), {1e-5, 0, 1e-4});
-  const FemModel linear_model = block(FemMaterialModel::linear);  // the solver keeps a reference to it
+  const FemModel linear_model = block(FemLaw::linear);  // the solver keeps a reference to it
   FemLinearStaticSolver lin(linear_model, base_fixed(m));
   const FemStaticResult linear = lin.solve(grab, d, {});
   FemLocalRegionOptions o;
@@ -325,7 +325,7 @@ TEST(FemLocalRegion, BadInputIsRefusedWithTheField) {
   EXPECT_NE(engine_field(dynamic, m, base_fixed(m)).find("needs solver: static"), std::string::npos);
   {
     const FemBoxMesh box = fem_box_mesh(kCells, kSize);
-    FemModel q = build_quadratic_fem_model(box.nodes, box.tets, test::fem_material(FemMaterialModel::neo_hookean));
+    FemModel q = build_quadratic_fem_model(box.nodes, box.tets, test::fem_material(FemLaw::neo_hookean));
     FemBoundaryConditions s = base_fixed(q);
     EXPECT_NE(engine_field(local_options(5), std::move(q), s).find("linear (4-node) tets"), std::string::npos);
   }

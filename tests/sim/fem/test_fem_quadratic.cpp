@@ -27,7 +27,7 @@ namespace {
 
 using test::fem_material;
 
-FemModel quadratic_box(FemMaterialModel law, std::array<int, 3> cells, std::array<double, 3> size, double nu = 0.3) {
+FemModel quadratic_box(FemLaw law, std::array<int, 3> cells, std::array<double, 3> size, double nu = 0.3) {
   const auto box = fem_box_mesh(cells, size);
   return build_quadratic_fem_model(box.nodes, box.tets, fem_material(law, 3e4, nu));
 }
@@ -82,8 +82,8 @@ FemBoxMesh irregular_box(std::array<int, 3> cells, std::array<double, 3> size, d
 
 TEST(FemQuadratic, ModelHasOneNodePerEdgeAndItsMassesAndLoadsSumToTheMass) {
   const auto box = fem_box_mesh({2, 1, 1}, {4, 2, 2});
-  const FemModel lin = build_fem_model(box.nodes, box.tets, fem_material(FemMaterialModel::neo_hookean));
-  const FemModel m = build_quadratic_fem_model(box.nodes, box.tets, fem_material(FemMaterialModel::neo_hookean));
+  const FemModel lin = build_fem_model(box.nodes, box.tets, fem_material(FemLaw::neo_hookean));
+  const FemModel m = build_quadratic_fem_model(box.nodes, box.tets, fem_material(FemLaw::neo_hookean));
   EXPECT_EQ(m.order, 2);
   EXPECT_EQ(m.nodes_per_element(), 10);
   EXPECT_EQ(m.tet_count(), lin.tet_count());
@@ -127,7 +127,7 @@ TEST(FemQuadratic, ShapeFunctionsInterpolateTheirNodes) {
 }
 
 TEST(FemQuadratic, ForcesAreMinusTheEnergyGradientAndTheTangentTheirDerivative) {
-  for (auto law : {FemMaterialModel::linear, FemMaterialModel::stvk, FemMaterialModel::neo_hookean}) {
+  for (auto law : {FemLaw::linear, FemLaw::stvk, FemLaw::neo_hookean}) {
     const FemModel m = quadratic_box(law, {1, 1, 1}, {2, 2, 2});
     std::vector<double> u(m.nodes.size());
     for (std::size_t k = 0; k < u.size(); ++k) u[k] = 0.15 * std::sin(1.3 * k + 0.4);
@@ -143,7 +143,7 @@ TEST(FemQuadratic, ForcesAreMinusTheEnergyGradientAndTheTangentTheirDerivative) 
       worst = std::max(worst, std::abs(-g - f[k]));
       scale = std::max(scale, std::abs(f[k]));
     }
-    EXPECT_LT(worst, 1e-5 * scale) << fem_material_model_name(law);
+    EXPECT_LT(worst, 1e-5 * scale) << fem_law_name(law);
   }
 }
 
@@ -155,8 +155,8 @@ TEST(FemQuadratic, PatchTestAQuadraticFieldIsReproducedExactly) {
   const double eps = 1e-3;
   const Field exact = [&](const double* x) { return std::array<double, 3>{eps * (x[0] * x[0] - x[1] * x[1]), -2 * eps * x[0] * x[1], 0.0}; };
   const auto box = irregular_box({3, 3, 3}, size, 0.2);
-  const auto p2 = boundary_value_error(build_quadratic_fem_model(box.nodes, box.tets, fem_material(FemMaterialModel::linear)), size, exact);
-  const auto p1 = boundary_value_error(build_fem_model(box.nodes, box.tets, fem_material(FemMaterialModel::linear)), size, exact);
+  const auto p2 = boundary_value_error(build_quadratic_fem_model(box.nodes, box.tets, fem_material(FemLaw::linear)), size, exact);
+  const auto p1 = boundary_value_error(build_fem_model(box.nodes, box.tets, fem_material(FemLaw::linear)), size, exact);
   std::printf("quadratic field: largest nodal error %.3g mm with quadratic tets, %.3g mm with linear ones (field up to %.3g mm)\n",
               p2.first, p1.first, eps * 9);
   EXPECT_LT(p2.first, 1e-12);
@@ -177,8 +177,8 @@ TEST(FemQuadratic, ConvergenceOrdersOnASmoothExactSolution) {
     std::vector<double> err;
     for (int n : quadratic ? std::vector<int>{2, 4, 8} : std::vector<int>{4, 8, 16}) {
       const auto box = irregular_box({n, n, n}, size, 0.15);
-      const FemModel m = quadratic ? build_quadratic_fem_model(box.nodes, box.tets, fem_material(FemMaterialModel::linear))
-                                   : build_fem_model(box.nodes, box.tets, fem_material(FemMaterialModel::linear));
+      const FemModel m = quadratic ? build_quadratic_fem_model(box.nodes, box.tets, fem_material(FemLaw::linear))
+                                   : build_fem_model(box.nodes, box.tets, fem_material(FemLaw::linear));
       err.push_back(boundary_value_error(m, size, exact).second);
     }
     order[quadratic] = std::log2(err[1] / err[2]);
@@ -199,8 +199,8 @@ TEST(FemQuadratic, CantileverIsWithinHalfAPercentOfTimoshenko) {
   for (int quadratic = 0; quadratic < 2; ++quadratic) {
     const int nc = 2;
     const auto box = fem_box_mesh({10 * nc, nc, nc}, {L, b, b});
-    const FemModel m = quadratic ? build_quadratic_fem_model(box.nodes, box.tets, fem_material(FemMaterialModel::linear, E, nu))
-                                 : build_fem_model(box.nodes, box.tets, fem_material(FemMaterialModel::linear, E, nu));
+    const FemModel m = quadratic ? build_quadratic_fem_model(box.nodes, box.tets, fem_material(FemLaw::linear, E, nu))
+                                 : build_fem_model(box.nodes, box.tets, fem_material(FemLaw::linear, E, nu));
     // Beam theory's clamp: the root section stays plane (u_x = 0 over it), its middle lines do not move
     // sideways, and it is free to contract (Poisson): held components only (a full clamp stiffens the
     // root by 0.8 % here).
@@ -249,7 +249,7 @@ TEST(FemQuadratic, CantileverIsWithinHalfAPercentOfTimoshenko) {
 }
 
 TEST(FemQuadratic, NeoHookeanGrabAndImplicitDynamicsSettleTogether) {
-  const FemModel m = quadratic_box(FemMaterialModel::neo_hookean, {6, 2, 2}, {12, 4, 4});
+  const FemModel m = quadratic_box(FemLaw::neo_hookean, {6, 2, 2}, {12, 4, 4});
   FemBoundaryConditions bc;
   bc.fixed_nodes = test::nodes_where(m, 0, 0.0);
   const auto tip = test::nodes_where(m, 0, 12.0);

@@ -69,7 +69,7 @@ TEST(FemStaticSolver, PatchTestUniformDeformationIsReproducedExactly) {
   for (double scale : {1e-4, 0.05}) {
     const double G[9] = {1.0 * scale, 0.3 * scale, -0.2 * scale, 0.1 * scale, -0.5 * scale, 0.2 * scale,
                          0.4 * scale, -0.1 * scale, 0.7 * scale};
-    for (auto model : {FemMaterialModel::linear, FemMaterialModel::stvk, FemMaterialModel::neo_hookean}) {
+    for (auto model : {FemLaw::linear, FemLaw::stvk, FemLaw::neo_hookean}) {
       const FemModel m = build_fem_model(box.nodes, box.tets, fem_material(model));
       auto exact = [&](int32_t i, int r) {
         return G[r * 3] * m.nodes[3 * i] + G[r * 3 + 1] * m.nodes[3 * i + 1] + G[r * 3 + 2] * m.nodes[3 * i + 2];
@@ -83,8 +83,8 @@ TEST(FemStaticSolver, PatchTestUniformDeformationIsReproducedExactly) {
       double err = 0;
       for (int32_t i = 0; i < n; ++i)
         for (int r = 0; r < 3; ++r) err = std::max(err, std::abs(res.displacements[3 * i + r] - exact(i, r)));
-      EXPECT_LT(err, 1e-7 * 6 * scale) << fem_material_model_name(model) << " scale " << scale;
-      if (model == FemMaterialModel::linear) {
+      EXPECT_LT(err, 1e-7 * 6 * scale) << fem_law_name(model) << " scale " << scale;
+      if (model == FemLaw::linear) {
         EXPECT_EQ(res.report.newton_iterations, 1);
       } else {
         EXPECT_LE(res.report.newton_iterations, 8);
@@ -96,7 +96,7 @@ TEST(FemStaticSolver, PatchTestUniformDeformationIsReproducedExactly) {
 // A cantilever L x h x h (L = 10 h), clamped at x = 0, tip load P (z) spread as a uniform shear traction
 // over the end face. Euler-Bernoulli: delta = P L^3 / (3 E I), I = h^4 / 12. Returns the relative error
 // of the mean tip deflection.
-double cantilever_error(int n, FemMaterialModel model, FemStaticReport* report = nullptr) {
+double cantilever_error(int n, FemLaw model, FemStaticReport* report = nullptr) {
   const double h = 2.0, L = 10 * h, E = 3e4;
   const auto box = fem_box_mesh({10 * n, n, n}, {L, h, h});
   const FemModel m = build_fem_model(box.nodes, box.tets, fem_material(model, E, 0.3));
@@ -125,7 +125,7 @@ TEST(FemStaticSolver, CantileverTipDeflectionConvergesToEulerBernoulli) {
   std::vector<double> errors;
   for (int n : {2, 4, 6, 8}) {
     FemStaticReport rep;
-    const double err = cantilever_error(n, FemMaterialModel::linear, &rep);
+    const double err = cantilever_error(n, FemLaw::linear, &rep);
     std::printf("cantilever L/h = 10, %d x %d x %d cells (h/%d, %d tets, %d unknowns): tip deflection error %+.2f %% vs "
                 "Euler-Bernoulli, %s solve, %.3f s\n",
                 10 * n, n, n, n, 60 * n * n * n, rep.free_components, 100 * err, rep.direct ? "direct" : "iterative", rep.seconds);
@@ -142,8 +142,8 @@ TEST(FemStaticSolver, CantileverTipDeflectionConvergesToEulerBernoulli) {
   std::printf("Richardson extrapolation (h/4, h/8): %+.2f %% vs Euler-Bernoulli\n", 100 * extrapolated);
   EXPECT_LT(std::abs(extrapolated), 0.03);
   // Neo-Hookean and StVK for the same small load agree with the linear solution.
-  EXPECT_NEAR(cantilever_error(2, FemMaterialModel::neo_hookean), errors[0], 5e-3);
-  EXPECT_NEAR(cantilever_error(2, FemMaterialModel::stvk), errors[0], 5e-3);
+  EXPECT_NEAR(cantilever_error(2, FemLaw::neo_hookean), errors[0], 5e-3);
+  EXPECT_NEAR(cantilever_error(2, FemLaw::stvk), errors[0], 5e-3);
 }
 
 // Neo-Hookean uniaxial stretch: F = diag(a, b, b), lateral faces free (P22 = P33 = 0):
@@ -151,7 +151,7 @@ TEST(FemStaticSolver, CantileverTipDeflectionConvergesToEulerBernoulli) {
 TEST(FemStaticSolver, NeoHookeanUniaxialStretchMatchesClosedForm) {
   const double L = 10, a = 1.3;
   const auto box = fem_box_mesh({3, 3, 3}, {L, L, L});
-  const FemModel m = build_fem_model(box.nodes, box.tets, fem_material(FemMaterialModel::neo_hookean, 3e4, 0.4));
+  const FemModel m = build_fem_model(box.nodes, box.tets, fem_material(FemLaw::neo_hookean, 3e4, 0.4));
   const double mu = m.lame.mu, lam = m.lame.lambda;
   double b = 1;
   for (int it = 0; it < 50; ++it) {
@@ -189,7 +189,7 @@ TEST(FemStaticSolver, NeoHookeanUniaxialStretchMatchesClosedForm) {
 
 TEST(FemStaticSolver, GrabWithLargeDisplacementConvergesAndBalances) {
   const auto box = fem_box_mesh({4, 4, 4}, {8, 8, 8});
-  const FemModel m = build_fem_model(box.nodes, box.tets, fem_material(FemMaterialModel::neo_hookean, 3e4, 0.45));
+  const FemModel m = build_fem_model(box.nodes, box.tets, fem_material(FemLaw::neo_hookean, 3e4, 0.45));
   FemBoundaryConditions bc;
   bc.fixed_nodes = nodes_where(m, 2, 0.0);
   for (int32_t i : nodes_where(m, 2, 8.0)) {  // pull the centre of the top face up and sideways
@@ -217,7 +217,7 @@ TEST(FemStaticSolver, GrabWithLargeDisplacementConvergesAndBalances) {
 
 TEST(FemStaticSolver, WarmStartFromANearbySolutionGivesTheSameEquilibriumInFewerIterations) {
   const auto box = fem_box_mesh({4, 4, 4}, {8, 8, 8});
-  const FemModel m = build_fem_model(box.nodes, box.tets, fem_material(FemMaterialModel::neo_hookean, 3e4, 0.45));
+  const FemModel m = build_fem_model(box.nodes, box.tets, fem_material(FemLaw::neo_hookean, 3e4, 0.45));
   FemBoundaryConditions bc;
   bc.fixed_nodes = nodes_where(m, 2, 0.0);
   const auto grab = [&](double up) {
@@ -259,7 +259,7 @@ TEST(FemStaticSolver, WarmStartFromANearbySolutionGivesTheSameEquilibriumInFewer
 
 TEST(FemStaticSolver, InexactNewtonReachesTheSameEquilibriumWithFewerCgIterations) {
   const auto box = fem_box_mesh({5, 5, 5}, {10, 10, 10});
-  const FemModel m = build_fem_model(box.nodes, box.tets, fem_material(FemMaterialModel::neo_hookean, 3e4, 0.45));
+  const FemModel m = build_fem_model(box.nodes, box.tets, fem_material(FemLaw::neo_hookean, 3e4, 0.45));
   FemBoundaryConditions bc;
   bc.fixed_nodes = nodes_where(m, 2, 0.0);
   for (int32_t i : nodes_where(m, 2, 10.0)) {
@@ -287,7 +287,7 @@ TEST(FemStaticSolver, InexactNewtonReachesTheSameEquilibriumWithFewerCgIteration
 
 TEST(FemStaticSolver, MissingOrInsufficientBoundaryConditionsAreInputErrors) {
   const auto box = fem_box_mesh({2, 2, 2}, {2, 2, 2});
-  const FemModel m = build_fem_model(box.nodes, box.tets, fem_material(FemMaterialModel::linear));
+  const FemModel m = build_fem_model(box.nodes, box.tets, fem_material(FemLaw::linear));
   FemLoads loads;
   loads.gravity = {0, 0, -9810};
   try {
@@ -335,7 +335,7 @@ TEST(FemStaticSolver, MissingOrInsufficientBoundaryConditionsAreInputErrors) {
 
 TEST(FemStaticSolver, BothPreconditionersGiveTheSameAnswer) {
   const auto box = fem_box_mesh({12, 3, 3}, {24, 6, 6});
-  const FemModel m = build_fem_model(box.nodes, box.tets, fem_material(FemMaterialModel::neo_hookean));
+  const FemModel m = build_fem_model(box.nodes, box.tets, fem_material(FemLaw::neo_hookean));
   FemBoundaryConditions bc;
   bc.fixed_nodes = nodes_where(m, 0, 0.0);
   FemLoads loads;
@@ -357,7 +357,7 @@ struct GrabbedCube {
   FemBoundaryConditions bc;
 };
 
-GrabbedCube grabbed_cube(FemMaterialModel law, double push = -1.5) {
+GrabbedCube grabbed_cube(FemLaw law, double push = -1.5) {
   const auto box = fem_box_mesh({5, 5, 5}, {10, 10, 10});
   GrabbedCube c{build_fem_model(box.nodes, box.tets, fem_material(law, 3e4, 0.45)), {}};
   c.bc.fixed_nodes = nodes_where(c.model, 2, 0.0);
@@ -370,9 +370,9 @@ GrabbedCube grabbed_cube(FemMaterialModel law, double push = -1.5) {
 }
 
 TEST(FemStaticSolver, DirectAndIterativeSolvesAgree) {
-  for (const FemMaterialModel law : {FemMaterialModel::linear, FemMaterialModel::neo_hookean, FemMaterialModel::stvk,
-                                     FemMaterialModel::corotational}) {
-    SCOPED_TRACE(fem_material_model_name(law));
+  for (const FemLaw law : {FemLaw::linear, FemLaw::neo_hookean, FemLaw::stvk,
+                                     FemLaw::corotational}) {
+    SCOPED_TRACE(fem_law_name(law));
     const GrabbedCube c = grabbed_cube(law);
     FemStaticOptions direct, iterative;
     direct.linear_solve = FemLinearSolve::direct;
@@ -388,7 +388,7 @@ TEST(FemStaticSolver, DirectAndIterativeSolvesAgree) {
 }
 
 TEST(FemStaticSolver, ToleranceInMillimetresStopsAtTheBudget) {
-  const GrabbedCube c = grabbed_cube(FemMaterialModel::neo_hookean);
+  const GrabbedCube c = grabbed_cube(FemLaw::neo_hookean);
   const auto tight = solve_fem_static(c.model, c.bc, {});
   for (const double mm : {1e-2, 1e-4}) {
     FemStaticOptions o;
@@ -408,7 +408,7 @@ TEST(FemStaticSolver, ToleranceInMillimetresStopsAtTheBudget) {
 // Neo-Hookean at nu = 0.45 stretched by half: lambda ln J > mu in the stretched elements, whose exact
 // tangents are indefinite; projected where needed or always, Newton reaches the same equilibrium.
 TEST(FemStaticSolver, IndefiniteTangentsAreProjectedAndNewtonStillConverges) {
-  const GrabbedCube pull = grabbed_cube(FemMaterialModel::neo_hookean, 5.0);
+  const GrabbedCube pull = grabbed_cube(FemLaw::neo_hookean, 5.0);
   FemStaticOptions when_needed, always;
   always.projection = FemTangentProjection::always;
   when_needed.linear_solve = always.linear_solve = FemLinearSolve::direct;
@@ -423,7 +423,7 @@ TEST(FemStaticSolver, IndefiniteTangentsAreProjectedAndNewtonStillConverges) {
 }
 
 TEST(FemStaticSolver, AKeptSolverReusesItsFactorAcrossSolves) {
-  GrabbedCube c = grabbed_cube(FemMaterialModel::neo_hookean, -0.5);
+  GrabbedCube c = grabbed_cube(FemLaw::neo_hookean, -0.5);
   FemStaticOptions o;
   o.linear_solve = FemLinearSolve::direct;
   FemStaticSolver solver(c.model, o);
@@ -452,7 +452,7 @@ TEST(FemStaticSolver, ASingularPartOfTheMeshIsNamedByItsNode) {
   std::vector<int32_t> tets = a.tets;
   const int32_t offset = static_cast<int32_t>(a.nodes.size() / 3);
   for (const int32_t v : b.tets) tets.push_back(v + offset);
-  const FemModel m = build_fem_model(nodes, tets, fem_material(FemMaterialModel::linear));
+  const FemModel m = build_fem_model(nodes, tets, fem_material(FemLaw::linear));
   FemBoundaryConditions bc;
   for (int32_t i = 0; i < offset; ++i)
     if (m.nodes[3 * i + 2] == 0) bc.fixed_nodes.push_back(i);

@@ -16,7 +16,7 @@
 namespace ctsurg::sim {
 namespace {
 
-FemModel box() { return test::fem_box_model(FemMaterialModel::linear, {4, 2, 2}, {4, 2, 2}); }
+FemModel box() { return test::fem_box_model(FemLaw::linear, {4, 2, 2}, {4, 2, 2}); }
 
 // The node at (x, y, z) mm.
 int32_t node_at(const FemModel& m, double x, double y, double z) {
@@ -46,8 +46,10 @@ TEST(FemTools, SphereSelectsTheFreeNodesStrictlyInsideAtTheirCurrentPositions) {
   const auto seven = free_nodes_in_sphere(m, u, fixed, {2, 1, 1}, 1.01);
   EXPECT_EQ(seven.size(), 7u);
   EXPECT_TRUE(std::is_sorted(seven.begin(), seven.end()));
-  // A fixed node is never selected; a displaced node is found where it is now.
-  fixed[static_cast<size_t>(node_at(m, 2, 1, 1))] = 1;
+  // A wholly fixed node is never selected, one held in some axes is (tools move its free axes); a
+  // displaced node is found where it is now.
+  fixed[static_cast<size_t>(node_at(m, 2, 1, 1))] = kAllAxes;
+  fixed[static_cast<size_t>(node_at(m, 3, 1, 1))] = 2;  // y held
   EXPECT_EQ(free_nodes_in_sphere(m, u, fixed, {2, 1, 1}, 1.01).size(), 6u);
   const int32_t corner = node_at(m, 0, 0, 0);
   u[3 * static_cast<size_t>(corner)] = -5;
@@ -131,7 +133,7 @@ TEST(FemTools, ANodeTwoGrabsHoldFollowsTheLaterOne) {
 TEST(FemTools, ForceIsSharedEquallyAndChangesOnlyWhenItStartsOrEnds) {
   const FemModel m = box();
   std::vector<uint8_t> fixed(static_cast<size_t>(m.node_count()), 0);
-  fixed[static_cast<size_t>(node_at(m, 4, 1, 1))] = 1;
+  fixed[static_cast<size_t>(node_at(m, 4, 1, 1))] = kAllAxes;
   FemToolHolds holds(m, fixed, "s.yaml");
   const std::vector<double> u(m.nodes.size(), 0.0);
   ToolInput f = grab_at({4, 1, 1}, 1.01);
@@ -155,6 +157,33 @@ TEST(FemTools, ForceIsSharedEquallyAndChangesOnlyWhenItStartsOrEnds) {
   EXPECT_TRUE(holds.update_forces({f}, u, false));
   EXPECT_TRUE(holds.nodal_forces().empty());
   EXPECT_FALSE(holds.engaged(0));
+}
+
+// A node held in some axes takes the force's other components: a neighbour held in z (a roller) is
+// captured, and the z force is shared by the four nodes free in z, the total kept.
+TEST(FemTools, ForceActsOnTheFreeAxesOfAPartlyHeldNode) {
+  const FemModel m = box();
+  std::vector<uint8_t> fixed(static_cast<size_t>(m.node_count()), 0);
+  fixed[static_cast<size_t>(node_at(m, 4, 1, 1))] = kAllAxes;
+  const int32_t roller = node_at(m, 3, 1, 1);
+  fixed[static_cast<size_t>(roller)] = 4;  // z held
+  FemToolHolds holds(m, fixed, "s.yaml");
+  ToolInput f = grab_at({4, 1, 1}, 1.01);
+  f.kind = ToolKind::force;
+  f.label = "tools[0] (force)";
+  f.force_n = {0.3, 0, 0.5};
+  EXPECT_TRUE(holds.update_forces({f}, std::vector<double>(m.nodes.size(), 0.0), false));
+  EXPECT_EQ(holds.held_nodes(0).size(), 5u);  // the roller too
+  const auto& forces = holds.nodal_forces();
+  EXPECT_EQ(forces[3 * static_cast<size_t>(roller) + 2], 0.0);
+  EXPECT_DOUBLE_EQ(forces[3 * static_cast<size_t>(roller)], 0.3e6 / 5);  // x is free: its share
+  double z = 0;
+  for (const int32_t n : holds.held_nodes(0))
+    if (n != roller) {
+      EXPECT_DOUBLE_EQ(forces[3 * static_cast<size_t>(n) + 2], 0.5e6 / 4);
+      z += forces[3 * static_cast<size_t>(n) + 2];
+    }
+  EXPECT_NEAR(z, 0.5e6, 1e-6);
 }
 
 TEST(FemTools, SphereOnEmptySpaceIsAnInputErrorNamingTheTool) {

@@ -36,7 +36,7 @@ namespace {
 
 std::string fem_text(const std::string& solver) {
   return "ctsurg_scenario: 1\nname: live fem bar\nmodel:\n  kind: fem\n  tetmesh: tetmesh.h5\n  surface: surface.h5\n"
-         "  material_law: neo_hookean\n  solver: " + solver + "\nmaterial:\n  youngs_modulus_pa: 20000\n  poisson_ratio: 0.3\n"
+         "  solver: " + solver + "\nmaterial:\n  law: neo_hookean\n  youngs_modulus_pa: 20000\n  poisson_ratio: 0.3\n"
          "  damping_per_s: 200\nfixed:\n  - box: {min: [10, -20, 30], max: [11.5, 0, 40]}\n"
          "time:\n  duration_s: 1\noutput:\n  trajectory: out.h5\n  frame_interval_s: 0.01\n";
 }

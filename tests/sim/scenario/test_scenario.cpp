@@ -175,11 +175,11 @@ TEST(Scenario, UnreadableFileIsNamed) {
 
 TEST(Scenario, FemKindsAndTheirRules) {
   const std::string base =
-      "ctsurg_scenario: 1\nmodel:\n  kind: fem\n  tetmesh: t.h5\n  material_law: stvk\n  solver: static\n"
-      "material: {preset: kidney}\ntime: {duration_s: 1}\noutput: {trajectory: o.h5}\n";
+      "ctsurg_scenario: 1\nmodel:\n  kind: fem\n  tetmesh: t.h5\n  solver: static\n"
+      "material: {law: stvk, preset: kidney}\ntime: {duration_s: 1}\noutput: {trajectory: o.h5}\n";
   const auto s = parse_scenario(base, "f.yaml", "/b");
   EXPECT_EQ(s.model, ctsurg::sim::ModelKind::fem);
-  EXPECT_EQ(s.material_law, ctsurg::sim::FemMaterialModel::stvk);
+  EXPECT_EQ(s.material_law, ctsurg::sim::FemLaw::stvk);
   EXPECT_EQ(s.fem_solver, ctsurg::sim::FemSolver::static_equilibrium);
   EXPECT_TRUE(s.grid.empty());  // no grid for an FEM scene
   const auto describe = ctsurg::sim::describe_scenario(s);
@@ -271,12 +271,12 @@ TEST(Scenario, ContactSectionForTheExplicitFem) {
 
 TEST(Scenario, SolverSectionAxesAndTheNewFemModels) {
   const std::string base =
-      "ctsurg_scenario: 1\nmodel:\n  kind: fem\n  tetmesh: t.h5\n  material_law: corotational\n  solver: implicit\n"
-      "material: {preset: kidney, stiffness_damping_s: 0.01}\ntime: {duration_s: 1}\noutput: {trajectory: o.h5}\n"
+      "ctsurg_scenario: 1\nmodel:\n  kind: fem\n  tetmesh: t.h5\n  solver: implicit\n"
+      "material: {law: corotational, preset: kidney, stiffness_damping_s: 0.01}\ntime: {duration_s: 1}\noutput: {trajectory: o.h5}\n"
       "fixed:\n  - {box_fraction: {min: [0, 0, 0], max: [1, 1, 0.1]}, axes: [z, x]}\n"
       "solver: {linear: direct, tolerance_mm: 0.05, max_newton_iterations: 7, max_cg_iterations: 300}\n";
   const auto s = parse_scenario(base, "f.yaml", "/b");
-  EXPECT_EQ(s.material_law, ctsurg::sim::FemMaterialModel::corotational);
+  EXPECT_EQ(s.material_law, ctsurg::sim::FemLaw::corotational);
   EXPECT_EQ(s.fem_solver, ctsurg::sim::FemSolver::implicit);
   EXPECT_DOUBLE_EQ(s.stiffness_damping_s, 0.01);
   ASSERT_EQ(s.fixed.size(), 1u);
@@ -303,7 +303,8 @@ TEST(Scenario, SolverSectionAxesAndTheNewFemModels) {
   expect_error(replaced(base, "solver: implicit", "solver: static"), "material.stiffness_damping_s: only for kind: fem with solver: implicit");
   expect_error(replaced(dynamic, ", axes: [z, x]", ""),
                "solver: only for kind: fem with solver: static or implicit");
-  expect_error(replaced(base, "material_law: corotational", "material_law: hookean"), "model.material_law");
+  expect_error(replaced(base, "law: corotational", "law: hookean"),
+               "f.yaml: material.law: unknown law 'hookean' (the laws: linear, stvk, neo_hookean, corotational, mooney_rivlin)");
   EXPECT_EQ(parse_scenario(replaced(base, "solver: implicit", "solver: implicit\n  elements: quadratic"), "f.yaml", "/b").fem_order, 2);
   expect_error(replaced(dynamic, "solver: dynamic", "solver: dynamic\n  elements: quadratic"), "model.elements: quadratic tets need solver: static or implicit");
   expect_error(replaced(base, "solver: implicit", "solver: implicit\n  elements: cubic"), "model.elements");
@@ -314,6 +315,37 @@ TEST(Scenario, SolverSectionAxesAndTheNewFemModels) {
       "output: {trajectory: o.h5}\nfixed:\n  - {label: 1, axes: [y]}\n";
   EXPECT_EQ(parse_scenario(springs, "f.yaml", "/b").fixed[0].axes, 2);
   expect_error(springs + "solver: {tolerance_mm: 0.1}\n", "solver: only for kind: fem");
+}
+
+// The law is the material section's (material.law) with its own constants; the old spelling
+// model.material_law is refused with the new one in the message.
+TEST(Scenario, MaterialLawAndItsConstants) {
+  const std::string base =
+      "ctsurg_scenario: 1\nmodel:\n  kind: fem\n  tetmesh: t.h5\n  solver: static\n"
+      "material: {law: mooney_rivlin, c10_pa: 3000, c01_pa: 500, preset: liver}\ntime: {duration_s: 1}\noutput: {trajectory: o.h5}\n";
+  const auto s = parse_scenario(base, "f.yaml", "/b");
+  EXPECT_EQ(s.material_law, ctsurg::sim::FemLaw::mooney_rivlin);
+  EXPECT_DOUBLE_EQ(s.law_constants[0], 3000);
+  EXPECT_DOUBLE_EQ(s.law_constants[1], 500);
+  EXPECT_DOUBLE_EQ(s.material.poisson_ratio, 0.45);                        // the preset's
+  EXPECT_NEAR(s.material.youngs_modulus_pa, 2 * 2 * 3500 * 1.45, 1e-9);  // from the constants, not the preset
+  const auto expect_error = [&](const std::string& text, const std::string& part) {
+    const std::string e = parse_error(text);
+    EXPECT_NE(e.find(part), std::string::npos) << e;
+  };
+  expect_error(replaced(base, "c01_pa: 500, ", ""), "f.yaml: material.c01_pa: missing");
+  expect_error(replaced(base, "c01_pa: 500", "c01_pa: -5"), "f.yaml: material.c01_pa");
+  expect_error(replaced(base, "preset: liver", "preset: liver, youngs_modulus_pa: 5000"),
+               "material.youngs_modulus_pa: mooney_rivlin's stiffness comes from its constants");
+  expect_error(replaced(base, "preset: liver", "preset: liver, poisson_ratio: 0.05"), "material.poisson_ratio: mooney_rivlin needs lambda - 4 c01 > 0");
+  expect_error(replaced(base, "law: mooney_rivlin", "law: neo_hookean"),
+               "material.c10_pa: a constant of law mooney_rivlin, and this material's law is neo_hookean");
+  expect_error(replaced(base, "solver: static\n", "solver: static\n  material_law: neo_hookean\n"),
+               "f.yaml: model.material_law: the law moved to the material section: write `material: {law: neo_hookean, ...}`");
+  const std::string springs = "ctsurg_scenario: 1\nmodel: {kind: spring_grid, grid: g.h5}\nmaterial: {preset: kidney, law: linear}\n"
+                              "time: {duration_s: 1}\noutput: {trajectory: o.h5}\n";
+  expect_error(springs, "f.yaml: material.law: only for kind: fem");
+  expect_error(replaced(springs, "law: linear", "c10_pa: 4"), "material.c10_pa: a constant of law mooney_rivlin, and this material's law is the spring_grid model's own");
 }
 
 TEST(Scenario, RenderRequestsAreChecked) {

@@ -130,8 +130,8 @@ TEST(ScenarioGpu, FemScenarioWithASurfaceMatchesTheCpu) {
   ctsurg::sim::test::write_block_files(dir.path(), 16, 4, 4, 2.0);
   ctsurg::sim::test::write_bar_tet_mesh(dir.path());
   const char* fem = R"(ctsurg_scenario: 1
-model: {kind: fem, tetmesh: tetmesh.h5, surface: surface.h5, material_law: neo_hookean, solver: static}
-material: {preset: liver}
+model: {kind: fem, tetmesh: tetmesh.h5, surface: surface.h5, solver: static}
+material: {law: neo_hookean, preset: liver}
 fixed: [{box_fraction: {min: [0, 0, 0], max: [0.05, 1, 1]}}]
 tools:
   - grab: {radius_mm: 3, snap_to_tissue: true, path: [{t: 0, at_fraction: [1, 0.5, 0.5]}, {t: 0.1, offset_mm: [0, 0, 5]}]}

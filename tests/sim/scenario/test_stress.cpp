@@ -52,9 +52,14 @@ void write_bar(const fs::path& dir) {
   ctsurg::sim::test::write_bar_tet_mesh(dir);
 }
 
-// A scenario on the bar: `model` is the model section's body, `tools` and `time` whole sections.
-std::string bar_scenario(const std::string& model, const std::string& material, const std::string& tools,
-                         const std::string& time) {
+// A scenario on the bar: `model` is the model section's body, `tools` and `time` whole sections. A
+// model body's line "  law: X" (fem_model) goes to the material section, where the law is given.
+std::string bar_scenario(std::string model, std::string material, const std::string& tools, const std::string& time) {
+  if (const auto at = model.find("  law: "); at != std::string::npos) {
+    const auto end = model.find('\n', at) + 1;
+    material = model.substr(at, end - at) + material;
+    model.erase(at, end - at);
+  }
   return "ctsurg_scenario: 1\nmodel:\n" + model + "  surface: surface.h5\nmaterial:\n" + material +
          "fixed:\n  - box: {min: [10, -20, 30], max: [12.5, 0, 40]}\n" + tools + time +
          "output:\n  trajectory: out.h5\n  frame_interval_s: 0.01\n";
@@ -63,7 +68,7 @@ std::string bar_scenario(const std::string& model, const std::string& material, 
 const char* kGridModel = "  kind: spring_grid\n  grid: grid.h5\n";
 const char* kExplicitModel = "  kind: explicit_springs\n  springs_from: grid\n  grid: grid.h5\n";
 std::string fem_model(const std::string& law, const std::string& solver) {
-  return "  kind: fem\n  tetmesh: tetmesh.h5\n  material_law: " + law + "\n  solver: " + solver + "\n";
+  return "  kind: fem\n  tetmesh: tetmesh.h5\n  law: " + law + "\n  solver: " + solver + "\n";
 }
 
 // What a stress run ended with.
@@ -373,9 +378,9 @@ FemBoxMesh jittered_box() {
 
 // Clamps the x = 0 face, pulls the x = 16 face 2 mm along +x in 0.01 s with explicit dynamics at the
 // auto step; returns "" when it completed (finite, bounded), else the guard's message.
-std::string run_fem_pull(const FemBoxMesh& b, FemMaterialModel law, double duration) {
+std::string run_fem_pull(const FemBoxMesh& b, FemLaw law, double duration) {
   FemMaterial mat;
-  mat.model = law;
+  mat.law = law;
   mat.youngs_modulus = 20000;
   mat.poisson_ratio = 0.45;
   mat.density = 1.06e-3;
@@ -417,7 +422,7 @@ std::string run_fem_pull(const FemBoxMesh& b, FemMaterialModel law, double durat
 // auto step, with static Newton, and as calibrated explicit springs.
 TEST(Stress, BadlyShapedTets) {
   FemMaterial mat;
-  mat.model = FemMaterialModel::neo_hookean;
+  mat.law = FemLaw::neo_hookean;
   mat.youngs_modulus = 20000;
   mat.poisson_ratio = 0.45;
   mat.density = 1.06e-3;
@@ -441,7 +446,7 @@ TEST(Stress, BadlyShapedTets) {
   // The critical step follows the flattened tets' altitude (3 % of a cell).
   EXPECT_LT(fem_critical_time_step(flat_model).critical, 0.1 * fem_critical_time_step(reg_model).critical);
   for (const auto& [name, mesh] : std::vector<std::pair<std::string, const FemBoxMesh*>>{{"flattened", &flat}, {"jittered", &jitter}}) {
-    for (const FemMaterialModel law : {FemMaterialModel::linear, FemMaterialModel::neo_hookean}) {
+    for (const FemLaw law : {FemLaw::linear, FemLaw::neo_hookean}) {
       const std::string m = run_fem_pull(*mesh, law, 0.015);
       std::printf("[ stress   ] %s tets, explicit FEM law %d: %s\n", name.c_str(), int(law), m.empty() ? "completed" : m.c_str());
       if (!m.empty()) {

@@ -17,15 +17,15 @@ namespace ctsurg::sim::test {
 // A box of cells[0] x cells[1] x cells[2] cells (6 Kuhn tets each) spanning `size` mm from the origin,
 // one material: E (Pa), nu, soft-tissue density.
 // A material of the law, E (Pa) and nu, soft-tissue density.
-inline FemMaterial fem_material(FemMaterialModel law, double youngs_pa = 3e4, double poisson = 0.3) {
+inline FemMaterial fem_material(FemLaw law, double youngs_pa = 3e4, double poisson = 0.3) {
   FemMaterial m;
-  m.model = law;
+  m.law = law;
   m.youngs_modulus = youngs_pa;
   m.poisson_ratio = poisson;
   return m;
 }
 
-inline FemModel fem_box_model(FemMaterialModel law, std::array<int, 3> cells, std::array<double, 3> size, double youngs_pa = 3e4,
+inline FemModel fem_box_model(FemLaw law, std::array<int, 3> cells, std::array<double, 3> size, double youngs_pa = 3e4,
                               double poisson = 0.45) {
   const auto box = fem_box_mesh(cells, size);
   return build_fem_model(box.nodes, box.tets, fem_material(law, youngs_pa, poisson));

@@ -88,7 +88,8 @@ struct EngineOptions {
 // What the model is, for reports.
 struct EngineCounts {
   int64_t nodes = 0;          // particles (spring models) or nodes (FEM)
-  int64_t fixed = 0;          // of them, held fixed
+  int64_t fixed = 0;          // of them, held fixed (every axis)
+  int64_t partly_fixed = 0;   // of them, held in some axes only (rollers, symmetry planes): tools move their free axes
   int64_t springs = 0;        // spring models: springs present at the start
   int64_t elements = 0;       // FEM: tets
   double critical_dt_s = 0;   // the critical time step (dynamic engines), s

@@ -61,7 +61,7 @@ struct FemLinearSolverStats {
 
 class FemLinearStaticSolver {
  public:
-  // model.material.model must be FemMaterialModel::linear; supports.fixed_nodes and
+  // model.material.law must be FemLaw::linear; supports.fixed_nodes and
   // supports.fixed_components are held at zero for every solve and must remove all rigid motions on
   // their own (grabs come and go with each solve); supports.prescribed_* must be empty. Throws
   // InputError("fem linear solver", field, ...): "material", "fixed_nodes", "fixed_components",
@@ -71,8 +71,8 @@ class FemLinearStaticSolver {
   FemLinearStaticSolver(const FemLinearStaticSolver&) = delete;
   FemLinearStaticSolver& operator=(const FemLinearStaticSolver&) = delete;
 
-  // The equilibrium with `prescribed_nodes` (#G, not supported, no repeats) held at
-  // `prescribed_displacements` (#G x 3 mm) under `loads`. Throws InputError("fem linear solver",
+  // The equilibrium with `prescribed_nodes` (#G, not supported in every axis, no repeats) held at
+  // `prescribed_displacements` (#G x 3 mm; a node's supported axes stay at 0 whatever they say) under `loads`. Throws InputError("fem linear solver",
   // field, ...) for bad arguments ("prescribed_nodes", "prescribed_displacements", "forces", "gravity").
   // The report: newton_iterations = 1 + refinements, cg_iterations empty (a direct solve),
   // relative_residual, seconds (this solve, columns computed for it included), solve_seconds (the

@@ -1,5 +1,9 @@
 // The tools of a tetrahedral FEM model (fem_engine.h), on its nodes:
 //
+// A node held in some axes only (a roller or symmetry-plane support: FixedRegionSpec::axes) is captured
+// too, and the tools act on its free axes: a grab prescribes its held axes at 0 (where the support
+// holds them), a force's component along an axis is shared by the captured nodes free in that axis.
+//
 //   grab   captures the free nodes inside its sphere once, when it first becomes active, with their
 //          displacement then; afterwards they are held (prescribed displacements: the static solver's
 //          FemBoundaryConditions, the explicit dynamics' set_prescribed) at that displacement plus the
@@ -25,16 +29,21 @@
 
 namespace ctsurg::sim {
 
-// The free nodes (increasing ids) whose current position rest + u lies strictly inside the sphere
-// (centre mm, radius mm). fixed: #N flags (1 = fixed, never selected); u: #N x 3 mm.
+// Every axis of a node held (held_axes masks: bit a for axis a).
+inline constexpr uint8_t kAllAxes = 7;
+
+// The nodes not wholly held (increasing ids) whose current position rest + u lies strictly inside the
+// sphere (centre mm, radius mm). held_axes: #N masks (bit a: axis a held; kAllAxes: never selected);
+// u: #N x 3 mm.
 std::vector<int32_t> free_nodes_in_sphere(const FemModel& model, const std::vector<double>& u,
-                                          const std::vector<uint8_t>& fixed, const Vec3& centre, double radius);
+                                          const std::vector<uint8_t>& held_axes, const Vec3& centre, double radius);
 
 // What the tools hold, by tool index. `where` names the run in messages (InputError(where, tool
 // label, ...) when a tool captures nothing); `note` receives what was captured (may be empty).
 class FemToolHolds {
  public:
-  FemToolHolds(const FemModel& model, std::vector<uint8_t> fixed, std::string where,
+  // held_axes: #N masks, as free_nodes_in_sphere's.
+  FemToolHolds(const FemModel& model, std::vector<uint8_t> held_axes, std::string where,
                std::function<void(const std::string&)> note = {});
 
   // The grabs at time t (s) from the grab entries of `tools`: captures (at `t`, or at each tool's
@@ -52,7 +61,7 @@ class FemToolHolds {
   // The nodes tool `tool` holds (a grab's capture, a force's loaded nodes; increasing), empty when none.
   const std::vector<int32_t>& held_nodes(size_t tool) const;
   // After a cut split nodes (fem_cutting.h): node N + k copies parents[k] (N: the count before); a copy
-  // of a fixed node is fixed. What the tools hold stays as it is.
+  // of a node is held in the axes its parent is. What the tools hold stays as it is.
   void nodes_added(const std::vector<int32_t>& parents);
   // Whether an update with `tools` captures (a grab or force active that has not captured yet): the
   // caller passes the nodes' current displacement then.
@@ -69,7 +78,7 @@ class FemToolHolds {
   std::vector<int32_t> capture(const ToolInput& tool, const Vec3& centre, const std::vector<double>& u) const;
 
   const FemModel& model_;
-  std::vector<uint8_t> fixed_;
+  std::vector<uint8_t> held_axes_;
   std::string where_;
   std::function<void(const std::string&)> note_;
   std::vector<Hold> holds_;

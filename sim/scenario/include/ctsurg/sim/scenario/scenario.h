@@ -28,7 +28,7 @@ namespace ctsurg::sim {
 
 enum class ModelKind { spring_grid, explicit_springs, fem, vessel };
 enum class SpringSource { grid, tetmesh };  // where explicit springs come from
-// fem: the material law is a FemMaterialModel (fem/fem_material.h), the solver a FemSolver
+// fem: the material law is a FemLaw (fem/laws/fem_law.h), the solver a FemSolver
 // (fem/fem_engine.h).
 
 // A point given in one of three ways; resolved to the run's frame when it starts (tool_timeline.h).
@@ -163,7 +163,8 @@ struct Scenario {
   std::filesystem::path centerline; // centerline file (ctsurg-centerline): kind vessel (reads nothing else)
   VesselSpec vessel;                // kind vessel
   CouplingMode coupling = CouplingMode::trilinear;
-  FemMaterialModel material_law = FemMaterialModel::neo_hookean;  // kind: fem
+  FemLaw material_law = FemLaw::neo_hookean;  // kind: fem; material.law
+  std::array<double, kFemLawConstants> law_constants{};  // kind: fem; the law's own (material.c10_pa, ...), Pa
   FemSolver fem_solver = FemSolver::dynamic;                       // kind: fem
   int fem_order = 1;  // kind: fem; elements: linear (1, 4-node tets) | quadratic (2, 10-node; static and implicit)
   bool mass_from_fraction = false;

@@ -32,7 +32,8 @@
 namespace ctsurg::sim {
 
 struct RunReport {
-  int64_t particles = 0, fixed = 0;  // particles (spring models) or nodes (FEM); those held fixed
+  int64_t particles = 0, fixed = 0;  // particles (spring models) or nodes (FEM); those held fixed (every axis)
+  int64_t partly_fixed = 0;          // those held in some axes only (the tools move their free axes)
   int64_t springs = 0;               // spring models: springs present at the start
   int64_t elements = 0;              // FEM: tets
   double critical_dt_s = 0;  // the critical step (springs/stability.h, fem/fem_explicit_dynamics.h)

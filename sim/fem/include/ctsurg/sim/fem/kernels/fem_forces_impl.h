@@ -9,15 +9,24 @@
 
 namespace ctsurg::sim {
 
+// The most materials one model's elements may have (a view carries them by value, so a kernel launch
+// needs no extra buffer).
+inline constexpr int kFemMaxMaterials = 16;
+
 template <class T>
 struct FemElementView {
-  const int32_t* tets;  // #T x 4
-  const T* dm_inverse;  // #T x 9
-  const T* volume;      // #T mm^3
-  int32_t count;        // #T
-  int32_t model;        // kFemLinear, kFemStvk, kFemNeoHookean, kFemCorotational
-  T mu, lambda;         // Pa
-  int32_t order = 1;    // 1: tets #T x 4; 2: #T x 10 (quadratic; host only)
+  const int32_t* tets = nullptr;  // #T x 4
+  const T* dm_inverse = nullptr;  // #T x 9
+  const T* volume = nullptr;      // #T mm^3
+  int32_t count = 0;              // #T
+  int32_t order = 1;              // 1: tets #T x 4; 2: #T x 10 (quadratic; host only)
+  // Element e's law and constants: materials[element_material[e]], or materials[0] for every element
+  // when element_material is null (one material).
+  const int32_t* element_material = nullptr;  // #T, each < material_count
+  int32_t material_count = 1;
+  FemLawParameters<T> materials[kFemMaxMaterials];
+
+  CTSURG_HD const FemLawParameters<T>& material(int32_t e) const { return materials[element_material ? element_material[e] : 0]; }
 };
 
 // Element e's nodal displacements (N nodes: 4 for linear tets, 10 for quadratic) into ue[0 .. 3 N - 1].
@@ -37,7 +46,7 @@ template <class T>
 CTSURG_HD inline bool fem_element_force_pass(const FemElementView<T>& v, const T* u, int32_t e, T* corner_forces) {
   T ue[12];
   fem_gather_element<4>(v.tets, u, e, ue);
-  return fem_element_forces(v.model, v.mu, v.lambda, ue, v.dm_inverse + 9 * e, v.volume[e], corner_forces + 12 * e);
+  return fem_element_forces(v.material(e), ue, v.dm_inverse + 9 * e, v.volume[e], corner_forces + 12 * e);
 }
 
 // Quadratic element e: its 10 nodes' forces into slot_forces[30 e .. 30 e + 29]; false when inverted.
@@ -45,7 +54,7 @@ template <class T>
 CTSURG_HD inline bool fem_quadratic_element_force_pass(const FemElementView<T>& v, const T* u, int32_t e, T* slot_forces) {
   T ue[30];
   fem_gather_element<10>(v.tets, u, e, ue);
-  return fem_quadratic_element_forces(v.model, v.mu, v.lambda, ue, v.dm_inverse + 9 * e, v.volume[e], slot_forces + 30 * e);
+  return fem_quadratic_element_forces(v.material(e), ue, v.dm_inverse + 9 * e, v.volume[e], slot_forces + 30 * e);
 }
 
 // Node i: the sum of its corners' forces, in CSR order.

@@ -84,7 +84,7 @@ CTSURG_HD inline void fem_quadratic_deformation_gradient(const T* u, const T* G,
 // Element forces f (30, uN) from its node displacements u (30 mm). Returns false (forces of the points
 // before it summed, the caller reports the element) when some point's det F <= 0.
 template <class T>
-CTSURG_HD inline bool fem_quadratic_element_forces(int32_t model, T mu, T lambda, const T* u, const T* B, T V, T* f) {
+CTSURG_HD inline bool fem_quadratic_element_forces(const FemLawParameters<T>& k, const T* u, const T* B, T V, T* f) {
   for (int i = 0; i < 3 * kFemQuadraticNodes; ++i) f[i] = T(0);
   bool ok = true;
   for (int q = 0; q < 4; ++q) {
@@ -92,7 +92,7 @@ CTSURG_HD inline bool fem_quadratic_element_forces(int32_t model, T mu, T lambda
     fem_quadratic_point(q, l);
     fem_quadratic_gradients(B, l, G);
     fem_quadratic_deformation_gradient(u, G, F);
-    ok = fem_first_piola(model, mu, lambda, F, P) && ok;
+    ok = fem_first_piola(k, F, P) && ok;
     const T w = T(0.25) * V;
     for (int a = 0; a < kFemQuadraticNodes; ++a)
       CTSURG_UNROLL
@@ -104,15 +104,16 @@ CTSURG_HD inline bool fem_quadratic_element_forces(int32_t model, T mu, T lambda
 
 // Element strain energy (nJ); 1e30 when some point's det F <= 0 for the laws that need det F > 0.
 template <class T>
-CTSURG_HD inline T fem_quadratic_element_energy(int32_t model, T mu, T lambda, const T* u, const T* B, T V) {
+CTSURG_HD inline T fem_quadratic_element_energy(const FemLawParameters<T>& k, const T* u, const T* B, T V) {
+  const bool needs_positive_j = fem_law_traits(k.law).needs_positive_j;
   T e = T(0);
   for (int q = 0; q < 4; ++q) {
     T l[4], G[30], F[9];
     fem_quadratic_point(q, l);
     fem_quadratic_gradients(B, l, G);
     fem_quadratic_deformation_gradient(u, G, F);
-    if ((model == kFemNeoHookean || model == kFemCorotational) && !(det3(F) > T(0))) return T(1e30);
-    e += T(0.25) * V * fem_energy_density(model, mu, lambda, F);
+    if (needs_positive_j && !(det3(F) > T(0))) return T(1e30);
+    e += T(0.25) * V * fem_energy_density(k, F);
   }
   return e;
 }
