@@ -11,4 +11,5 @@ TETMESH_ARGS := --cell-size 6
 SCENARIOS := ../../scenarios/heart_grab.yaml ../../scenarios/heart_cut.yaml ../../scenarios/heart_probe.yaml \
              ../../scenarios/heart_explicit_grab.yaml ../../scenarios/heart_fem_grab.yaml \
              ../../scenarios/heart_retract.yaml ../../scenarios/heart_fem_cut.yaml \
-             ../../scenarios/heart_cut_suture.yaml ../../scenarios/heart_fem_local.yaml
+             ../../scenarios/heart_cut_suture.yaml ../../scenarios/heart_fem_local.yaml \
+             ../../scenarios/heart_fem_inclusion.yaml

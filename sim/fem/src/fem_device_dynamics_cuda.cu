@@ -211,7 +211,7 @@ struct FemDeviceDynamics::Device {
   int32_t nodes = 0;
   FemElementView<Real> elements{};  // device pointers
 
-  cuda::DeviceBuffer<int32_t> tets, offsets, corners;
+  cuda::DeviceBuffer<int32_t> tets, offsets, corners, element_material;
   cuda::DeviceBuffer<Real> dm_inverse, volume, corner_forces, forces, inv_mass, external;
   cuda::DeviceBuffer<double> rest, mass, partials, energy;
   cuda::DeviceBuffer<Real> u[3];  // displacement generations; u(t) = u[cur]
@@ -327,7 +327,9 @@ FemDeviceDynamics::FemDeviceDynamics(const FemModel& model, const std::vector<Re
   d.sphere.zero(d.stream);
   *d.status_host = Status{0, kNone, kNone, 0, 0, 0, 0, -1.0, 0, 0};
   d.status.upload(d.status_host.get(), 1, d.stream);
-  d.elements = fem_element_view<Real>(model, d.dm_inverse.data(), d.volume.data());
+  if (!model.element_material.empty()) d.element_material.upload(model.element_material, d.stream);
+  d.elements = fem_element_view<Real>(model, d.dm_inverse.data(), d.volume.data(),
+                                      model.element_material.empty() ? nullptr : d.element_material.data());
   d.elements.tets = d.tets.data();
   d.chunk_key = d.key();
   d.stream.synchronize();  // the host arrays may go away after return

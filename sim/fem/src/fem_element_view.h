@@ -8,19 +8,32 @@
 
 namespace ctsurg::sim {
 
-// dm_inverse: #T x 9, volume: #T, both kept alive by the caller as long as the view.
+static_assert(kFemModelMaxMaterials <= kFemMaxMaterials, "a view carries every material of a model");
+
+// dm_inverse: #T x 9, volume: #T, both kept alive by the caller as long as the view; element_material:
+// the model's (#T, or null for one material), on the device for a device view.
 template <class T>
-FemElementView<T> fem_element_view(const FemModel& model, const T* dm_inverse, const T* volume) {
+FemElementView<T> fem_element_view(const FemModel& model, const T* dm_inverse, const T* volume, const int32_t* element_material) {
   FemElementView<T> v;
   v.tets = model.tets.data();
   v.dm_inverse = dm_inverse;
   v.volume = volume;
   v.count = model.tet_count();
   v.order = model.order;
-  v.material_count = 1;
-  v.materials[0] = {model.material.law, static_cast<T>(model.lame.mu), static_cast<T>(model.lame.lambda),
-                    {static_cast<T>(model.material.constants[0]), static_cast<T>(model.material.constants[1])}};
+  v.material_count = static_cast<int32_t>(model.materials.size());
+  for (std::size_t k = 0; k < model.materials.size(); ++k) {
+    const FemMaterial& m = model.materials[k];
+    v.materials[k] = {m.law, static_cast<T>(model.lame[k].mu), static_cast<T>(model.lame[k].lambda),
+                      {static_cast<T>(m.constants[0]), static_cast<T>(m.constants[1])}};
+  }
+  v.element_material = element_material;
   return v;
+}
+
+// A host view (element_material: the model's own).
+template <class T>
+FemElementView<T> fem_element_view(const FemModel& model, const T* dm_inverse, const T* volume) {
+  return fem_element_view<T>(model, dm_inverse, volume, model.element_material.empty() ? nullptr : model.element_material.data());
 }
 
 // The model's own (double) element data.

@@ -198,7 +198,7 @@ void FemEngine::make_solvers() {
     }
     return;
   }
-  if (model_.material.law == FemLaw::linear && model_.order == 1 && newton.linear_solve != FemLinearSolve::iterative &&
+  if (model_.every_law(FemLaw::linear) && model_.order == 1 && newton.linear_solve != FemLinearSolve::iterative &&
       supports_hold) {
     FemLinearSolverOptions lo;
     lo.threads = options_.threads;
@@ -283,7 +283,7 @@ void FemEngine::split_nodes(const std::vector<int32_t>& tets, const std::vector<
   };
   std::vector<double> nodes = model_.nodes;
   extend(nodes);
-  FemModel m = build_fem_model(nodes, tets, model_.material);
+  FemModel m = build_fem_model(nodes, tets, model_.materials, model_.element_material);  // a cut keeps the tets (and their materials)
   m.frame_origin = model_.frame_origin;
   // A copy is held as its parent is: whole (fixed_nodes) or in single components (fixed_components).
   std::vector<uint8_t> fixed = held_axes(n0, supports_);

@@ -79,8 +79,13 @@ FemCriticalStep fem_critical_time_step(const FemModel& model, double safety_fact
   if (model.order != 1) throw InputError("fem critical step", "order", "the explicit dynamics runs linear tets only");
   FemCriticalStep cs;
   cs.safety_factor = safety_factor;
-  cs.wave_speed = std::sqrt((model.lame.lambda + 2 * model.lame.mu) / model.material.density);
+  // The dilatational wave speed of each material (the critical step is the smallest h_e / c_e).
+  std::vector<double> speed;
+  for (std::size_t k = 0; k < model.materials.size(); ++k)
+    speed.push_back(std::sqrt((model.lame[k].lambda + 2 * model.lame[k].mu) / model.materials[k].density));
+  cs.wave_speed = speed[0];
   cs.length = HUGE_VAL;
+  double shortest = HUGE_VAL;  // h_e / c_e
   static const int faces[4][3] = {{1, 2, 3}, {0, 2, 3}, {0, 1, 3}, {0, 1, 2}};
   for (int32_t e = 0; e < model.tet_count(); ++e) {
     double largest = 0;
@@ -94,8 +99,15 @@ FemCriticalStep fem_critical_time_step(const FemModel& model, double safety_fact
       largest = std::max(largest, 0.5 * std::sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]));
     }
     const double h = 3 * model.rest_volume[e] / largest;
-    if (h < cs.length) {
+    if (speed.size() == 1) {
+      if (h < cs.length) {
+        cs.length = h;
+        cs.element = e;
+      }
+    } else if (const double c = speed[static_cast<std::size_t>(model.material_index(e))]; h / c < shortest) {
+      shortest = h / c;
       cs.length = h;
+      cs.wave_speed = c;
       cs.element = e;
     }
   }

@@ -43,7 +43,6 @@ double fem_strain_energy(const FemModel& model, const std::vector<double>& displ
   check_displacements(model, displacements, "fem strain energy");
   double energy = 0;
   const FemElementView<double> el = fem_element_view(model);
-  const bool needs_positive_j = fem_law_traits(el.materials[0].law).needs_positive_j;
   if (model.order == 2) {
     for (int32_t e = 0; e < model.tet_count(); ++e) {
       double ue[30];
@@ -59,7 +58,7 @@ double fem_strain_energy(const FemModel& model, const std::vector<double>& displ
     double ue[12], F[9];
     element_displacements(model, e, displacements, ue);
     fem_deformation_gradient(ue, &model.dm_inverse[9 * e], F);
-    if (needs_positive_j && !(det3(F) > 0)) return HUGE_VAL;
+    if (fem_law_traits(el.material(e).law).needs_positive_j && !(det3(F) > 0)) return HUGE_VAL;
     energy += model.rest_volume[e] * fem_energy_density(el.material(e), F);
   }
   return energy;

@@ -58,7 +58,7 @@ struct FemLinearStaticSolver::Impl {
     const int32_t n = m.node_count();
     if (m.order != 1)
       throw InputError(kWhere, "order", "the condensed solver is for linear tets; quadratic ones solve with solve_fem_static");
-    if (m.material.law != FemLaw::linear)
+    if (!m.every_law(FemLaw::linear))
       throw InputError(kWhere, "material", "the factorised solver is for the linear material only (its K is constant); use solve_fem_static for St. Venant-Kirchhoff or Neo-Hookean");
     if (!supports.prescribed_nodes.empty() || !supports.prescribed_displacements.empty())
       throw InputError(kWhere, "prescribed_nodes", "supports are fixed nodes and components only; pass grabs to solve()");

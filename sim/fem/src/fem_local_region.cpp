@@ -97,7 +97,10 @@ FemModel sub_model(const FemModel& model, const std::vector<int32_t>& tets, std:
   std::vector<int32_t> corners(4 * tets.size());
   for (size_t k = 0; k < tets.size(); ++k)
     for (size_t a = 0; a < 4; ++a) corners[4 * k + a] = to_local[static_cast<size_t>(model.tets[4 * static_cast<size_t>(tets[k]) + a])];
-  FemModel m = build_fem_model(nodes, corners, model.material);
+  std::vector<int32_t> element_material;  // the tets keep their materials
+  if (!model.element_material.empty())
+    for (const int32_t e : tets) element_material.push_back(model.element_material[static_cast<size_t>(e)]);
+  FemModel m = build_fem_model(nodes, corners, model.materials, element_material);
   m.frame_origin = model.frame_origin;
   return m;
 }
@@ -139,7 +142,7 @@ struct FemLocalRegionSolver::Impl {
   std::vector<int32_t> grab_of;  // #N: index into the prescribed nodes, -1
 
   Impl(const FemModel& m, const FemBoundaryConditions& supports, const FemLocalRegionOptions& o, Backend b)
-      : model(m), options(o), backend(b), linear_model(m) {
+      : model(m), options(o), backend(b), linear_model(fem_linearised(m)) {
     if (!(options.radius_mm > 0) || !std::isfinite(options.radius_mm))
       throw InputError(kWhere, "radius_mm", "must be a positive number of mm (got " + std::to_string(options.radius_mm) + ")");
     if (options.balance_iterations < 0 || options.balance_iterations > 1000)
@@ -148,7 +151,6 @@ struct FemLocalRegionSolver::Impl {
       throw InputError(kWhere, "balance_tolerance_mm", "must be a positive number of mm");
     if (model.order != 1) throw InputError(kWhere, "order", "the local region runs on linear (4-node) tets only");
     if (!supports.prescribed_nodes.empty()) throw InputError(kWhere, "prescribed_nodes", "supports hold nodes at zero; grabs come with each solve");
-    linear_model.material.law = FemLaw::linear;
     global = std::make_unique<FemLinearStaticSolver>(linear_model, supports, options.linear);
     const size_t n = static_cast<size_t>(model.node_count());
     whole.assign(n, 0);
@@ -250,8 +252,7 @@ struct FemLocalRegionSolver::Impl {
     if (tets.empty()) return;
     sub = std::make_unique<FemModel>(sub_model(model, tets, sub_to_global, global_to_sub));
     newton = std::make_unique<FemStaticSolver>(*sub, options.newton, backend);
-    sub_linear = std::make_unique<FemModel>(*sub);
-    sub_linear->material.law = FemLaw::linear;
+    sub_linear = std::make_unique<FemModel>(fem_linearised(*sub));
     std::vector<int32_t> ring_tets;
     for (const int32_t i : interface)
       for (int32_t k = model.node_offsets[static_cast<size_t>(i)]; k < model.node_offsets[static_cast<size_t>(i) + 1]; ++k)
@@ -264,7 +265,7 @@ struct FemLocalRegionSolver::Impl {
       ring_in = sub_model(model, inside, ring_in_to_global, global_to_ring);
       for (const int32_t g : ring_in_to_global) global_to_ring[static_cast<size_t>(g)] = -1;
       ring_out = sub_model(model, outside, ring_to_global, global_to_ring);
-      ring_out.material.law = FemLaw::linear;
+      ring_out = fem_linearised(std::move(ring_out));
     }
   }
 

@@ -29,7 +29,17 @@ std::string tet_text(const std::vector<double>& nodes, const int32_t* t) {
 }  // namespace
 
 FemModel build_fem_model(const std::vector<double>& nodes, const std::vector<int32_t>& tets, const FemMaterial& material) {
-  validate_fem_material(material, kWhere);
+  return build_fem_model(nodes, tets, std::vector<FemMaterial>{material}, {});
+}
+
+FemModel build_fem_model(const std::vector<double>& nodes, const std::vector<int32_t>& tets, const std::vector<FemMaterial>& materials,
+                         const std::vector<int32_t>& element_material) {
+  if (materials.empty() || materials.size() > static_cast<std::size_t>(kFemModelMaxMaterials))
+    throw InputError(kWhere, "materials", "a model has 1 to " + std::to_string(kFemModelMaxMaterials) + " materials, got " + std::to_string(materials.size()));
+  for (std::size_t k = 0; k < materials.size(); ++k) {
+    const std::string where = materials.size() == 1 ? std::string(kWhere) : std::string(kWhere) + " material " + std::to_string(k);
+    validate_fem_material(materials[k], where.c_str());
+  }
   if (nodes.size() % 3 != 0) throw InputError(kWhere, "nodes", "expected #N x 3 coordinates, got " + std::to_string(nodes.size()) + " values");
   if (tets.size() % 4 != 0) throw InputError(kWhere, "tets", "expected #T x 4 node ids, got " + std::to_string(tets.size()) + " values");
   if (tets.empty()) throw InputError(kWhere, "tets", "the mesh has no tetrahedra");
@@ -42,11 +52,20 @@ FemModel build_fem_model(const std::vector<double>& nodes, const std::vector<int
     if (!std::isfinite(nodes[i])) throw InputError(kWhere, "nodes", "node " + std::to_string(i / 3) + " is not finite");
 
   FemModel m;
-  m.material = material;
-  m.lame = lame_parameters(material);
+  m.materials = materials;
+  for (const FemMaterial& material : materials) m.lame.push_back(lame_parameters(material));
   m.nodes = nodes;
   m.tets = tets;
   const int32_t n = m.node_count(), t_count = m.tet_count();
+  if (!element_material.empty()) {
+    if (element_material.size() != static_cast<std::size_t>(t_count))
+      throw InputError(kWhere, "materials", "expected one material id per tet (" + std::to_string(t_count) + "), got " + std::to_string(element_material.size()));
+    for (int32_t e = 0; e < t_count; ++e)
+      if (element_material[static_cast<std::size_t>(e)] < 0 || element_material[static_cast<std::size_t>(e)] >= static_cast<int32_t>(materials.size()))
+        throw InputError(kWhere, "materials", "tet " + std::to_string(e) + " has material id " + std::to_string(element_material[static_cast<std::size_t>(e)]) +
+                                                  ", not one of the " + std::to_string(materials.size()) + " materials");
+    m.element_material = element_material;
+  }
   for (int32_t e = 0; e < t_count; ++e)
     for (int a = 0; a < 4; ++a) {
       const int32_t v = tets[4 * e + a];
@@ -96,7 +115,7 @@ FemModel build_fem_model(const std::vector<double>& nodes, const std::vector<int
     for (int a = 0; a < 4; ++a) {
       const int32_t v = tets[4 * e + a];
       m.node_corners[fill[v]++] = 4 * e + a;  // e increases: rows come out sorted
-      m.node_mass[v] += material.density * m.rest_volume[e] / 4;
+      m.node_mass[v] += m.material_of(e).density * m.rest_volume[e] / 4;
     }
   for (int32_t i = 0; i < n; ++i)
     if (m.node_offsets[i + 1] == m.node_offsets[i]) ++m.unused_nodes;
@@ -110,7 +129,12 @@ FemModel build_fem_model(const TetMesh& mesh, const FemMaterial& material) {
 }
 
 FemModel build_quadratic_fem_model(const std::vector<double>& nodes, const std::vector<int32_t>& tets, const FemMaterial& material) {
-  FemModel m = build_fem_model(nodes, tets, material);  // checks, volumes, B of the corners
+  return build_quadratic_fem_model(nodes, tets, std::vector<FemMaterial>{material}, {});
+}
+
+FemModel build_quadratic_fem_model(const std::vector<double>& nodes, const std::vector<int32_t>& tets,
+                                   const std::vector<FemMaterial>& materials, const std::vector<int32_t>& element_material) {
+  FemModel m = build_fem_model(nodes, tets, materials, element_material);  // checks, volumes, B of the corners
   const int32_t n1 = m.node_count(), t_count = m.tet_count();
   // Slot forces are indexed 30 e + 3 a in int32 (fem_forces_impl.h).
   if (t_count > INT32_MAX / 30) throw InputError(kWhere, "tets", "mesh too large for quadratic tets: at most " + std::to_string(INT32_MAX / 30) + " tets");
@@ -150,7 +174,7 @@ FemModel build_quadratic_fem_model(const std::vector<double>& nodes, const std::
   m.node_corners.resize(m.tets.size());
   std::vector<int32_t> fill(m.node_offsets.begin(), m.node_offsets.end() - 1);
   for (int32_t e = 0; e < t_count; ++e) {
-    const double rv = material.density * m.rest_volume[e];
+    const double rv = m.material_of(e).density * m.rest_volume[e];
     for (int a = 0; a < 10; ++a) {
       const int32_t v = m.tets[10 * static_cast<std::size_t>(e) + a];
       m.node_corners[fill[v]++] = 10 * e + a;
@@ -184,6 +208,22 @@ int32_t fem_edge_node(const FemModel& model, int32_t i, int32_t j) {
 
 double fem_total_volume(const FemModel& model) {
   return std::accumulate(model.rest_volume.begin(), model.rest_volume.end(), 0.0);
+}
+
+bool FemModel::every_law(FemLaw law) const {
+  return std::all_of(materials.begin(), materials.end(), [law](const FemMaterial& m) { return m.law == law; });
+}
+
+bool FemModel::any_indefinite_tangent() const {
+  return std::any_of(materials.begin(), materials.end(), [](const FemMaterial& m) { return fem_law_traits(m.law).indefinite_tangent; });
+}
+
+FemModel fem_linearised(FemModel model) {
+  for (FemMaterial& m : model.materials) {
+    m.law = FemLaw::linear;
+    m.constants = {};
+  }
+  return model;
 }
 
 double fem_total_mass(const FemModel& model) {

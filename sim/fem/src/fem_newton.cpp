@@ -324,7 +324,7 @@ int32_t FemNewton::assemble(const std::vector<double>& u, bool project) {
   mean_diagonal_ = diagonal_.empty() ? 1.0 : std::max(sum / static_cast<double>(diagonal_.size()), 1e-300);
   // The linear law's tangent does not depend on u: a factor of it stays current (set_terms and
   // build_system say when its coefficients or pattern change).
-  if (m_.material.law != FemLaw::linear) factor_current_ = false;
+  if (!m_.every_law(FemLaw::linear)) factor_current_ = false;
   return inverted;
 }
 
@@ -392,7 +392,7 @@ int FemNewton::solve_direct(const Eigen::VectorXd& b, Eigen::VectorXd& du, doubl
     ++rep.factorizations;
     rep.factor_bytes = cholesky_->factor_bytes();
     if (failed >= 0 && !projecting_ && o_.projection == FemTangentProjection::when_needed &&
-        fem_law_traits(m_.material.law).indefinite_tangent) {
+        m_.any_indefinite_tangent()) {
       // The exact tangent is indefinite here: project its elements, for the rest of this solve.
       projecting_ = true;
       assemble(*assembled_at_, true);
@@ -471,7 +471,7 @@ bool FemNewton::newton(std::vector<double>& u, double s, FemStaticReport& rep, s
   }
   double rnorm = r.norm();
   rep.residual_history.push_back(rnorm);
-  const bool linear = m_.material.law == FemLaw::linear;
+  const bool linear = m_.every_law(FemLaw::linear);
   const bool in_mm = o_.tolerance_mm > 0;
   std::vector<double> trial(u.size()), gap(u.size());
   bool lifting = held_gap(u, s, gap);

@@ -197,6 +197,30 @@ ScenarioEngine spring_engine(const Scenario& s, Backend backend, const std::func
 ScenarioEngine fem_engine(const Scenario& s, Backend backend, const std::function<void(const std::string&)>& note) {
   const std::string sfile = s.file.string();
   TetMesh mesh = read_tet_mesh_file(s.tetmesh);
+  // material.labels: every label of the mesh has a material and every material's label is in the mesh.
+  std::vector<int32_t> label_to_material;  // label -> index into materials
+  std::vector<FemMaterial> materials;
+  if (!s.label_materials.empty()) {
+    std::vector<uint8_t> present(65536, 0);
+    for (const uint16_t l : mesh.tet_labels) present[l] = 1;
+    std::string in_mesh;
+    for (size_t l = 0; l < present.size(); ++l)
+      if (present[l]) in_mesh += (in_mesh.empty() ? "" : ", ") + std::to_string(l);
+    label_to_material.assign(65536, -1);
+    for (const LabelMaterial& lm : s.label_materials) {
+      if (!present[lm.label]) {
+        throw InputError(sfile, lm.field, "the tet mesh " + s.tetmesh.string() + " has no label " + std::to_string(lm.label) + " (its labels: " + in_mesh + ")");
+      }
+      label_to_material[lm.label] = static_cast<int32_t>(materials.size());
+      materials.push_back(fem_material_of(lm));
+    }
+    for (size_t l = 0; l < present.size(); ++l) {
+      if (present[l] && label_to_material[l] < 0) {
+        throw InputError(sfile, "material.labels", "the tet mesh's label " + std::to_string(l) + " has no material (its labels: " + in_mesh +
+                                                       "); give every label one");
+      }
+    }
+  }
   const RestBounds lps_bounds = bounds_of(mesh.nodes);
   const Vec3 origin = local_origin({0.5 * (lps_bounds.lo[0] + lps_bounds.hi[0]), 0.5 * (lps_bounds.lo[1] + lps_bounds.hi[1]),
                                     0.5 * (lps_bounds.lo[2] + lps_bounds.hi[2])});
@@ -216,8 +240,39 @@ ScenarioEngine fem_engine(const Scenario& s, Backend backend, const std::functio
            std::to_string(b.tets_removed) + " tets taken out by the gap)");
     }
   }
-  const FemMaterial material = fem_material_of(s);
-  FemModel model = s.fem_order == 2 ? build_quadratic_fem_model(mesh, material) : build_fem_model(mesh, material);
+  std::vector<int32_t> element_material;
+  if (materials.empty()) {
+    materials.push_back(fem_material_of(s));
+  } else {
+    element_material.reserve(mesh.tet_labels.size());
+    for (const uint16_t l : mesh.tet_labels) element_material.push_back(label_to_material[l]);
+  }
+  // Inclusions: the tets whose centroid lies in the sphere take its material (a later one wins).
+  for (const InclusionMaterial& inc : s.inclusions) {
+    Vec3 c = inc.centre.kind == PointSpec::Kind::at_fraction ? lps_bounds.at(inc.centre.value) : inc.centre.value;  // LPS
+    for (size_t a = 0; a < 3; ++a) c[a] -= origin[a];
+    const int32_t id = static_cast<int32_t>(materials.size());
+    materials.push_back(fem_material_of(inc));
+    if (element_material.empty()) element_material.assign(mesh.tet_labels.size(), 0);
+    int64_t taken = 0;
+    for (size_t e = 0; e < element_material.size(); ++e) {
+      double d2 = 0;
+      for (size_t a = 0; a < 3; ++a) {
+        double x = 0;
+        for (size_t k = 0; k < 4; ++k) x += 0.25 * mesh.nodes[3 * static_cast<size_t>(mesh.tets[4 * e + k]) + a];
+        d2 += (x - c[a]) * (x - c[a]);
+      }
+      if (d2 < inc.radius_mm * inc.radius_mm) element_material[e] = id, ++taken;
+    }
+    if (taken == 0) {
+      throw InputError(sfile, inc.field + ".sphere", "holds no element of the tet mesh (centre LPS " + std::to_string(c[0] + origin[0]) + ", " +
+                                                         std::to_string(c[1] + origin[1]) + ", " + std::to_string(c[2] + origin[2]) + " mm, radius " +
+                                                         std::to_string(inc.radius_mm) + " mm)");
+    }
+    if (note) note(inc.field + ": " + std::to_string(taken) + " tets of " + inc.material.name);
+  }
+  FemModel model = s.fem_order == 2 ? build_quadratic_fem_model(mesh.nodes, mesh.tets, materials, element_material)
+                                    : build_fem_model(mesh.nodes, mesh.tets, materials, element_material);
   model.frame_origin = {origin[0], origin[1], origin[2]};
   // Fixed regions: the rest positions in float (as the spring models select them), the fractions of
   // the double-precision box. A label holds the edge nodes of a quadratic model between its nodes.

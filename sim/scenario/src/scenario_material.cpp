@@ -1,7 +1,10 @@
 #include "scenario_material.h"
 
 #include "ctsurg/core/error.h"
+#include "point_field.h"
 
+#include <cstdlib>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -18,61 +21,155 @@ std::vector<std::pair<std::string, FemLaw>> law_constant_fields() {
   return fields;
 }
 
+const std::vector<std::string> kValueFields = {"preset", "youngs_modulus_pa", "poisson_ratio", "density_g_per_cm3"};
+
+FemMaterial fem_material(FemLaw law, const Material& m, const std::array<double, kFemLawConstants>& constants) {
+  FemMaterial material;
+  material.law = law;
+  material.youngs_modulus = m.youngs_modulus_pa;
+  material.poisson_ratio = m.poisson_ratio;
+  material.density = m.density;
+  material.constants = constants;
+  return material;
+}
+
+// One material's fields at `f` (the material section, or one of its labels): its law (default_law
+// unless f has `law`), preset and values, the law's constants; checked, with f's path in messages.
+void parse_material_fields(const YamlField& f, ModelKind model, FemLaw default_law, Material& material, FemLaw& law,
+                           std::array<double, kFemLawConstants>& constants) {
+  const std::string& name = f.file();
+  const auto constant_fields = law_constant_fields();
+  law = default_law;
+  if (f.has("law")) {
+    if (model != ModelKind::fem) {
+      f.child("law").fail("only for kind: fem (the spring models' law is their springs, the vessel's its rod; docs/sim.md)");
+    }
+    const std::string text = f.child("law").text();
+    const auto named = fem_law_named(text);
+    if (!named) f.child("law").fail("unknown law '" + text + "' (the laws: " + fem_law_names() + ")");
+    law = *named;
+  }
+  const FemLawInfo& info = fem_law_info(law);
+  for (const auto& [field, owner] : constant_fields) {
+    if (f.has(field) && (model != ModelKind::fem || owner != law)) {
+      f.child(field).fail("a constant of law " + std::string(fem_law_name(owner)) + ", and this material's law is " +
+                          (model == ModelKind::fem ? std::string(info.name) : std::string("the ") + to_string(model) + " model's own"));
+    }
+  }
+  constants = {};
+  for (int i = 0; i < info.constant_count; ++i) constants[static_cast<size_t>(i)] = f.child(info.constant_names[i]).non_negative();
+  const bool stiffness_from_constants = model == ModelKind::fem && fem_youngs_modulus_from_constants(law, constants, 0.25).has_value();
+  if (stiffness_from_constants && f.has("youngs_modulus_pa")) {
+    f.child("youngs_modulus_pa")
+        .fail(std::string(info.name) + "'s stiffness comes from its constants (small-strain E = 2 mu (1 + nu), mu = 2 (c10 + c01)): leave youngs_modulus_pa out");
+  }
+
+  material = f.has("preset") ? material_preset(f.child("preset").text(), name, f.child("preset").path())
+                             : Material{"custom", 0, 0.45, 1.06e-3, "scenario"};
+  if (f.has("youngs_modulus_pa")) material.youngs_modulus_pa = f.child("youngs_modulus_pa").positive();
+  if (f.has("poisson_ratio")) material.poisson_ratio = f.child("poisson_ratio").number();
+  if (f.has("density_g_per_cm3")) material.density = f.child("density_g_per_cm3").positive() * 1e-3;
+  if (!f.has("preset") && !f.has("youngs_modulus_pa") && !stiffness_from_constants) f.fail("give a preset or youngs_modulus_pa");
+  if (f.has("youngs_modulus_pa") || f.has("poisson_ratio") || f.has("density_g_per_cm3") || stiffness_from_constants) {
+    material.source = f.has("preset") ? material.name + " preset with values from the scenario" : "scenario";
+    if (!f.has("preset")) material.name = "custom";
+  }
+  // validate_material names "material.<field>"; here the field sits at f's path.
+  const auto checked = [&](auto&& check) {
+    try {
+      check();
+    } catch (const InputError& e) {
+      std::string field = e.field();
+      if (field.rfind("material.", 0) == 0) field = field.substr(9);
+      throw InputError(name, f.path() + "." + field, e.problem());
+    }
+  };
+  if (stiffness_from_constants) {
+    if (!(material.poisson_ratio > -1 && material.poisson_ratio < 0.5)) checked([&] { validate_material(material, name); });  // names nu's range
+    material.youngs_modulus_pa = *fem_youngs_modulus_from_constants(law, constants, material.poisson_ratio);
+    if (!(material.youngs_modulus_pa > 0)) f.child(info.constant_names[0]).fail("the constants give no stiffness (they sum to 0)");
+  }
+  checked([&] { validate_material(material, name); });
+  if (model == ModelKind::fem) checked([&] { validate_fem_material(fem_material(law, material, constants), "material"); });
+}
+
 }  // namespace
 
 void parse_material_section(const YamlField& mat, Scenario& s) {
-  const std::string& name = mat.file();
-  std::vector<std::string> known = {"preset", "law", "youngs_modulus_pa", "poisson_ratio", "density_g_per_cm3", "damping_per_s",
-                                    "stiffness_damping_s"};
+  std::vector<std::string> known = {"law", "damping_per_s", "stiffness_damping_s", "labels", "inclusions"};
+  known.insert(known.end(), kValueFields.begin(), kValueFields.end());
   const auto constant_fields = law_constant_fields();
   for (const auto& [field, law] : constant_fields) known.push_back(field);
   mat.only(known);
 
-  if (mat.has("law")) {
-    if (s.model != ModelKind::fem) {
-      mat.child("law").fail("only for kind: fem (the spring models' law is their springs, the vessel's its rod; docs/sim.md)");
+  s.label_materials.clear();
+  if (mat.has("labels")) {
+    // Each tet label its own material; the section's law is the labels' default.
+    const YamlField labels = mat.child("labels");
+    if (s.model != ModelKind::fem) labels.fail("only for kind: fem (the spring models and the vessel take one material)");
+    if (!labels.is_map()) labels.fail("a map of tet labels to materials, e.g. {2: {preset: kidney}, 5: {preset: liver}}");
+    for (const std::string& field : kValueFields)
+      if (mat.has(field)) mat.child(field).fail("with material.labels each label gives its own material: move it into the labels");
+    for (const auto& [field, law] : constant_fields)
+      if (mat.has(field)) mat.child(field).fail("with material.labels each label gives its own material: move it into the labels");
+    FemLaw default_law = s.material_law;
+    if (mat.has("law")) {
+      const std::string text = mat.child("law").text();
+      const auto named = fem_law_named(text);
+      if (!named) mat.child("law").fail("unknown law '" + text + "' (the laws: " + fem_law_names() + ")");
+      default_law = *named;
     }
-    const std::string text = mat.child("law").text();
-    const auto law = fem_law_named(text);
-    if (!law) mat.child("law").fail("unknown law '" + text + "' (the laws: " + fem_law_names() + ")");
-    s.material_law = *law;
-  }
-  const FemLawInfo& info = fem_law_info(s.material_law);
-  for (const auto& [field, law] : constant_fields) {
-    if (mat.has(field) && (s.model != ModelKind::fem || law != s.material_law)) {
-      mat.child(field).fail("a constant of law " + std::string(fem_law_name(law)) + ", and this material's law is " +
-                            (s.model == ModelKind::fem ? std::string(info.name) : std::string("the ") + to_string(s.model) + " model's own"));
+    std::vector<std::string> entry_keys = {"law"};
+    entry_keys.insert(entry_keys.end(), kValueFields.begin(), kValueFields.end());
+    for (const auto& [field, law] : constant_fields) entry_keys.push_back(field);
+    std::map<uint16_t, LabelMaterial> by_label;
+    for (const std::string& key : labels.keys()) {
+      const YamlField entry = labels.child(key);
+      char* end = nullptr;
+      const long id = std::strtol(key.c_str(), &end, 10);
+      if (key.empty() || *end != '\0' || id < 1 || id > 65535) entry.fail("a tet label is a whole number from 1 to 65535, got '" + key + "'");
+      entry.only(entry_keys);
+      LabelMaterial lm;
+      lm.label = static_cast<uint16_t>(id);
+      lm.field = entry.path();
+      parse_material_fields(entry, s.model, default_law, lm.material, lm.law, lm.constants);
+      if (!by_label.emplace(lm.label, lm).second) entry.fail("label " + std::to_string(id) + " is given twice");
     }
+    if (by_label.empty()) labels.fail("names no label");
+    if (by_label.size() > static_cast<size_t>(kFemModelMaxMaterials)) {
+      labels.fail("at most " + std::to_string(kFemModelMaxMaterials) + " labels with materials, got " + std::to_string(by_label.size()));
+    }
+    for (auto& [label, lm] : by_label) s.label_materials.push_back(lm);
+    // The first label's material stands for the model where one material is reported.
+    s.material = s.label_materials.front().material;
+    s.material_law = s.label_materials.front().law;
+    s.law_constants = s.label_materials.front().constants;
+  } else {
+    parse_material_fields(mat, s.model, s.material_law, s.material, s.material_law, s.law_constants);
   }
-  s.law_constants = {};
-  for (int i = 0; i < info.constant_count; ++i) s.law_constants[static_cast<size_t>(i)] = mat.child(info.constant_names[i]).non_negative();
-  const bool stiffness_from_constants = s.model == ModelKind::fem && fem_youngs_modulus_from_constants(s.material_law, s.law_constants, 0.25).has_value();
-  if (stiffness_from_constants && mat.has("youngs_modulus_pa")) {
-    mat.child("youngs_modulus_pa")
-        .fail(std::string(info.name) + "'s stiffness comes from its constants (small-strain E = 2 mu (1 + nu), mu = 2 (c10 + c01)): leave youngs_modulus_pa out");
-  }
-
-  s.material = mat.has("preset") ? material_preset(mat.child("preset").text(), name, mat.child("preset").path())
-                                 : Material{"custom", 0, 0.45, 1.06e-3, "scenario"};
-  if (mat.has("youngs_modulus_pa")) s.material.youngs_modulus_pa = mat.child("youngs_modulus_pa").positive();
-  if (mat.has("poisson_ratio")) s.material.poisson_ratio = mat.child("poisson_ratio").number();
-  if (mat.has("density_g_per_cm3")) s.material.density = mat.child("density_g_per_cm3").positive() * 1e-3;
-  if (!mat.has("preset") && !mat.has("youngs_modulus_pa") && !stiffness_from_constants) mat.fail("give a preset or youngs_modulus_pa");
-  if (mat.has("youngs_modulus_pa") || mat.has("poisson_ratio") || mat.has("density_g_per_cm3") || stiffness_from_constants) {
-    s.material.source = mat.has("preset") ? s.material.name + " preset with values from the scenario" : "scenario";
-    if (!mat.has("preset")) s.material.name = "custom";
-  }
-  if (stiffness_from_constants) {
-    if (!(s.material.poisson_ratio > -1 && s.material.poisson_ratio < 0.5)) validate_material(s.material, name);  // names nu's range
-    s.material.youngs_modulus_pa = *fem_youngs_modulus_from_constants(s.material_law, s.law_constants, s.material.poisson_ratio);
-    if (!(s.material.youngs_modulus_pa > 0)) mat.child(info.constant_names[0]).fail("the constants give no stiffness (they sum to 0)");
-  }
-  validate_material(s.material, name);
-  if (s.model == ModelKind::fem) {
-    try {
-      validate_fem_material(fem_material_of(s), "material");
-    } catch (const InputError& e) {
-      throw InputError(name, "material." + e.field(), e.problem());
+  s.inclusions.clear();
+  if (mat.has("inclusions")) {
+    const YamlField list = mat.child("inclusions");
+    if (s.model != ModelKind::fem) list.fail("only for kind: fem (the spring models and the vessel take one material)");
+    if (!list.is_sequence()) list.fail("a list of spheres of other materials, e.g. [{sphere: {at_fraction: [0.5, 0.5, 0.5], radius_mm: 8}, preset: tumour}]");
+    FemLaw default_law = s.material_law;
+    if (mat.has("law")) default_law = *fem_law_named(mat.child("law").text());  // checked above
+    std::vector<std::string> keys = {"sphere", "law"};
+    keys.insert(keys.end(), kValueFields.begin(), kValueFields.end());
+    for (const auto& [field, law] : constant_fields) keys.push_back(field);
+    for (const YamlField& item : list.items()) {
+      item.only(keys);
+      InclusionMaterial inc;
+      inc.field = item.path();
+      const YamlField sphere = item.child("sphere");
+      sphere.only({"position_mm", "at_fraction", "radius_mm"});
+      inc.centre = point_of(sphere, false);
+      inc.radius_mm = sphere.child("radius_mm").positive();
+      parse_material_fields(item, s.model, default_law, inc.material, inc.law, inc.constants);
+      s.inclusions.push_back(inc);
+    }
+    if (s.label_materials.size() + s.inclusions.size() + (s.label_materials.empty() ? 1 : 0) > static_cast<size_t>(kFemModelMaxMaterials)) {
+      list.fail("at most " + std::to_string(kFemModelMaxMaterials) + " materials in a model (labels, inclusions and the tissue's)");
     }
   }
   if (mat.has("damping_per_s")) s.damping_per_s = mat.child("damping_per_s").non_negative();
@@ -83,14 +180,10 @@ void parse_material_section(const YamlField& mat, Scenario& s) {
   }
 }
 
-FemMaterial fem_material_of(const Scenario& s) {
-  FemMaterial material;
-  material.law = s.material_law;
-  material.youngs_modulus = s.material.youngs_modulus_pa;
-  material.poisson_ratio = s.material.poisson_ratio;
-  material.density = s.material.density;
-  material.constants = s.law_constants;
-  return material;
-}
+FemMaterial fem_material_of(const Scenario& s) { return fem_material(s.material_law, s.material, s.law_constants); }
+
+FemMaterial fem_material_of(const LabelMaterial& m) { return fem_material(m.law, m.material, m.constants); }
+
+FemMaterial fem_material_of(const InclusionMaterial& m) { return fem_material(m.law, m.material, m.constants); }
 
 }  // namespace ctsurg::sim

@@ -14,7 +14,10 @@ namespace ctsurg::sim {
 // s.stiffness_damping_s. Needs s.model, s.fem_solver (the model section is read first).
 void parse_material_section(const YamlField& material, Scenario& s);
 
-// The FEM material of a parsed scenario (its law, E, nu, density and the law's constants).
+// The FEM material of a parsed scenario (its law, E, nu, density and the law's constants), and of one
+// of its labels (material.labels).
 FemMaterial fem_material_of(const Scenario& s);
+FemMaterial fem_material_of(const LabelMaterial& m);
+FemMaterial fem_material_of(const InclusionMaterial& m);
 
 }  // namespace ctsurg::sim

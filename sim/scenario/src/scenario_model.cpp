@@ -17,9 +17,17 @@ std::string model_label(const Scenario& s) {
     case ModelKind::explicit_springs:
       return s.springs_from == SpringSource::grid ? "explicit_springs (grid)" : "explicit_springs (tetmesh)";
     case ModelKind::vessel: return s.vessel.skinning == VesselSkinning::rmf ? "vessel (rmf)" : "vessel (spokes)";
-    case ModelKind::fem:
-      return std::string("fem ") + fem_law_name(s.material_law) + (s.fem_order == 2 ? " quadratic" : "") +
+    case ModelKind::fem: {
+      // One law (per label too when they share it), or the laws of the labels: "fem neo_hookean+linear".
+      std::string laws = fem_law_name(s.material_law);
+      const auto add = [&](FemLaw law) {
+        if (laws.find(fem_law_name(law)) == std::string::npos) laws += std::string("+") + fem_law_name(law);
+      };
+      for (const LabelMaterial& m : s.label_materials) add(m.law);
+      for (const InclusionMaterial& m : s.inclusions) add(m.law);
+      return "fem " + laws + (s.fem_order == 2 ? " quadratic" : "") +
              (s.fem_solver == FemSolver::dynamic ? " (dynamic)" : s.fem_solver == FemSolver::implicit ? " (implicit)" : " (static)");
+    }
   }
   return "?";
 }

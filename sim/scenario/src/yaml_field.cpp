@@ -30,6 +30,16 @@ std::vector<YamlField> YamlField::items() const {
   return out;
 }
 
+std::vector<std::string> YamlField::keys() const {
+  if (!node_.IsMap()) fail("expected a map (key: value pairs)");
+  std::vector<std::string> keys;
+  for (const auto& kv : node_) {
+    if (!kv.first.IsScalar()) fail("a key is a list or a map; keys are plain names");
+    keys.push_back(kv.first.Scalar());
+  }
+  return keys;
+}
+
 void YamlField::only(std::initializer_list<const char*> known) const {
   only(std::vector<std::string>(known.begin(), known.end()));
 }

@@ -30,6 +30,7 @@ class YamlField {
   bool has(const std::string& key) const;            // a map with that key
   YamlField child(const std::string& key) const;     // a map's child; "missing (required)" when absent
   std::vector<YamlField> items() const;              // a list's items, paths "path[i]"
+  std::vector<std::string> keys() const;             // a map's keys, in the document's order
   // Refuses keys that are not in `known` (a misspelt key would otherwise be silently ignored).
   void only(std::initializer_list<const char*> known) const;
   void only(const std::vector<std::string>& known) const;

@@ -118,7 +118,7 @@ TEST(FemContact, TheLipsOfACrackPressedTogetherStayApart) {
       nodes.insert(nodes.end(), {nodes[3 * p], nodes[3 * p + 1], nodes[3 * p + 2]});
     }
   }
-  const FemModel m = build_fem_model(nodes, tets, m0.material);
+  const FemModel m = build_fem_model(nodes, tets, m0.materials[0]);
   ASSERT_GT(m.node_count(), m0.node_count());
   // The lips' overlap: each split node's left twin (the original id: the left elements are the lower
   // ones) against its right copy; positive when the right lip passed into the left.

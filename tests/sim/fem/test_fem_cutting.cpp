@@ -52,7 +52,7 @@ TEST(FemCutting, AThroughCutSplitsTheNodesOnTheCutAndKeepsEveryElement) {
   EXPECT_EQ(parents.size(), 16u);
   for (const int32_t p : parents) EXPECT_NEAR(m.nodes[3 * static_cast<size_t>(p)], 3.0, 1e-12);  // only the cut layer
   EXPECT_EQ(faces, 2 * 3 * 3);  // two triangles per cell face on the 3 x 3 cell faces at x = 3
-  const FemModel cut = build_fem_model(nodes, tets, m.material);
+  const FemModel cut = build_fem_model(nodes, tets, m.materials[0]);
   EXPECT_EQ(cut.tet_count(), m.tet_count());
   EXPECT_NEAR(fem_total_volume(cut), fem_total_volume(m), 1e-9);
   EXPECT_NEAR(fem_total_mass(cut), fem_total_mass(m), 1e-12);
@@ -118,7 +118,7 @@ std::vector<int32_t> random_cuts(const FemModel& m, uint64_t seed, int32_t* node
     const FemCutResult r = sep.cut(tets, static_cast<int32_t>(pos.size() / 3), pos, t);
     for (const int32_t p : r.new_node_parent) pos.insert(pos.end(), {pos[3 * p], pos[3 * p + 1], pos[3 * p + 2]});
   }
-  const FemModel cut = build_fem_model(pos, tets, m.material);
+  const FemModel cut = build_fem_model(pos, tets, m.materials[0]);
   EXPECT_NEAR(fem_total_volume(cut), fem_total_volume(m), 1e-9);
   *nodes_out = cut.node_count();
   return tets;

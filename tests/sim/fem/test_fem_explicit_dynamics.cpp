@@ -24,10 +24,27 @@ FemModel beam(std::array<int, 3> cells = {6, 2, 2}, std::array<double, 3> size =
 
 using test::nodes_where;
 
+// Two materials: the critical step is the smallest h_e / c_e, so the stiffer material (faster waves)
+// sets it on a uniform mesh, as if it filled the whole model.
+TEST(FemExplicitDynamics, CriticalStepOfSeveralMaterialsIsTheirSmallest) {
+  const FemModel soft = beam();
+  FemMaterial stiff = soft.materials[0];
+  stiff.youngs_modulus *= 4;
+  std::vector<int32_t> ids(static_cast<size_t>(soft.tet_count()));
+  for (size_t e = 0; e < ids.size(); ++e) ids[e] = e % 3 == 0 ? 1 : 0;
+  const FemModel mixed = build_fem_model(soft.nodes, soft.tets, {soft.materials[0], stiff}, ids);
+  const FemModel all_stiff = build_fem_model(soft.nodes, soft.tets, stiff);
+  const auto cm = fem_critical_time_step(mixed), cs = fem_critical_time_step(all_stiff);
+  EXPECT_DOUBLE_EQ(cm.critical, cs.critical);
+  EXPECT_DOUBLE_EQ(cm.wave_speed, cs.wave_speed);
+  EXPECT_EQ(mixed.material_index(cm.element), 1);
+  EXPECT_NEAR(fem_critical_time_step(soft).critical / cm.critical, 2.0, 1e-12);  // c grows with sqrt(E)
+}
+
 TEST(FemExplicitDynamics, CriticalStepFromTheSmallestElement) {
   const FemModel m = beam();
   const auto cs = fem_critical_time_step(m, 0.5);
-  const double c = std::sqrt((m.lame.lambda + 2 * m.lame.mu) / m.material.density);
+  const double c = std::sqrt((m.lame[0].lambda + 2 * m.lame[0].mu) / m.materials[0].density);
   EXPECT_NEAR(cs.wave_speed, c, 1e-9 * c);
   // Kuhn tets of a 2 mm cube: the smallest altitude is 2 / sqrt(2) (3 V / largest face area).
   EXPECT_NEAR(cs.length, 2 / std::sqrt(2.0), 1e-9);

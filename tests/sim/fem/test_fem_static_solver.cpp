@@ -152,7 +152,7 @@ TEST(FemStaticSolver, NeoHookeanUniaxialStretchMatchesClosedForm) {
   const double L = 10, a = 1.3;
   const auto box = fem_box_mesh({3, 3, 3}, {L, L, L});
   const FemModel m = build_fem_model(box.nodes, box.tets, fem_material(FemLaw::neo_hookean, 3e4, 0.4));
-  const double mu = m.lame.mu, lam = m.lame.lambda;
+  const double mu = m.lame[0].mu, lam = m.lame[0].lambda;
   double b = 1;
   for (int it = 0; it < 50; ++it) {
     const double g = mu * (b * b - 1) + lam * std::log(a * b * b), dg = 2 * mu * b + 2 * lam / b;

@@ -153,10 +153,12 @@ TEST(LiveSession, AProbePausesResumesResetsAndKeepsRealTime) {
   EXPECT_EQ(session.advance_events(10).events, 0);
   EXPECT_EQ(session.time(), t);
   session.resume();
-  // Real time: 20 ms of wall time give 20 ms of simulated time (this model steps far faster than real
-  // time), in about 20 ms of wall time.
+  // Real time: 20 ms of wall time give 20 ms of simulated time, or as much as 20 ms of wall time allow
+  // (the backlog dropped) where the model steps slower than real time (this bar does under the
+  // sanitizers); never more than the 20 ms asked, whatever the machine's speed.
   const LiveAdvance rt = session.advance(0.02);
-  EXPECT_GE(rt.sim_s, 0.02 - 1e-12);
+  EXPECT_TRUE(rt.sim_s >= 0.02 - 1e-12 || rt.wall_s >= 0.02) << "sim " << rt.sim_s << " s in " << rt.wall_s << " s";
+  EXPECT_GT(rt.sim_s, 0);
   EXPECT_LT(rt.sim_s, 0.02 + session.dt() * 1.5);
   session.end_tool(probe);
   session.advance_events(60);

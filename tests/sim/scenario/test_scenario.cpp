@@ -2,6 +2,7 @@
 // (presets, overrides, regions, tools, paths resolved against the file's folder); JSON works; every
 // kind of mistake is an InputError naming the file and the field.
 #include "ctsurg/sim/scenario/scenario.h"
+#include "ctsurg/sim/scenario/scenario_model.h"
 
 #include "ctsurg/core/error.h"
 #include "test_support.h"
@@ -24,6 +25,12 @@ std::string parse_error(const std::string& text) {
     return e.what();
   }
   return "(accepted)";
+}
+
+// parse_error(text) names `part` (a file, a field, a problem).
+void expect_error(const std::string& text, const std::string& part) {
+  const std::string e = parse_error(text);
+  EXPECT_NE(e.find(part), std::string::npos) << e;
 }
 
 const char* kFull = R"(
@@ -286,10 +293,6 @@ TEST(Scenario, SolverSectionAxesAndTheNewFemModels) {
   EXPECT_EQ(s.solver.max_newton_iterations, 7);
   EXPECT_EQ(s.solver.max_cg_iterations, 300);
   EXPECT_NE(ctsurg::sim::describe_scenario(s).find("\"solver\": \"implicit\""), std::string::npos);
-  const auto expect_error = [&](const std::string& text, const std::string& part) {
-    const std::string e = parse_error(text);
-    EXPECT_NE(e.find(part), std::string::npos) << e;
-  };
   expect_error(replaced(base, "axes: [z, x]", "axes: [z, w]"), "f.yaml: fixed[0].axes[1]");
   expect_error(replaced(base, "axes: [z, x]", "axes: [z, z]"), "'z' is named twice");
   expect_error(replaced(base, "axes: [z, x]", "axes: []"), "name at least one of x, y, z");
@@ -329,10 +332,6 @@ TEST(Scenario, MaterialLawAndItsConstants) {
   EXPECT_DOUBLE_EQ(s.law_constants[1], 500);
   EXPECT_DOUBLE_EQ(s.material.poisson_ratio, 0.45);                        // the preset's
   EXPECT_NEAR(s.material.youngs_modulus_pa, 2 * 2 * 3500 * 1.45, 1e-9);  // from the constants, not the preset
-  const auto expect_error = [&](const std::string& text, const std::string& part) {
-    const std::string e = parse_error(text);
-    EXPECT_NE(e.find(part), std::string::npos) << e;
-  };
   expect_error(replaced(base, "c01_pa: 500, ", ""), "f.yaml: material.c01_pa: missing");
   expect_error(replaced(base, "c01_pa: 500", "c01_pa: -5"), "f.yaml: material.c01_pa");
   expect_error(replaced(base, "preset: liver", "preset: liver, youngs_modulus_pa: 5000"),
@@ -346,6 +345,50 @@ TEST(Scenario, MaterialLawAndItsConstants) {
                               "time: {duration_s: 1}\noutput: {trajectory: o.h5}\n";
   expect_error(springs, "f.yaml: material.law: only for kind: fem");
   expect_error(replaced(springs, "law: linear", "c10_pa: 4"), "material.c10_pa: a constant of law mooney_rivlin, and this material's law is the spring_grid model's own");
+}
+
+// Each tet label its own material (material.labels; kind: fem): the section's law is their default,
+// each label gives its preset or values; what does not fit is refused naming the field.
+TEST(Scenario, MaterialPerLabel) {
+  const std::string base =
+      "ctsurg_scenario: 1\nmodel: {kind: fem, tetmesh: t.h5, solver: dynamic}\n"
+      "material:\n  law: neo_hookean\n  damping_per_s: 10\n  labels:\n    5: {preset: liver}\n"
+      "    2: {preset: kidney, law: mooney_rivlin, c10_pa: 1500, c01_pa: 200}\n"
+      "time: {duration_s: 1}\noutput: {trajectory: o.h5}\n";
+  const auto s = parse_scenario(base, "f.yaml", "/b");
+  ASSERT_EQ(s.label_materials.size(), 2u);
+  EXPECT_EQ(s.label_materials[0].label, 2);  // increasing labels
+  EXPECT_EQ(s.label_materials[0].law, ctsurg::sim::FemLaw::mooney_rivlin);
+  EXPECT_NEAR(s.label_materials[0].material.youngs_modulus_pa, 2 * 2 * 1700 * 1.45, 1e-9);
+  EXPECT_EQ(s.label_materials[0].field, "material.labels.2");
+  EXPECT_EQ(s.label_materials[1].label, 5);
+  EXPECT_EQ(s.label_materials[1].law, ctsurg::sim::FemLaw::neo_hookean);
+  EXPECT_EQ(s.label_materials[1].material.youngs_modulus_pa, 5.5e3);
+  EXPECT_DOUBLE_EQ(s.damping_per_s, 10);
+  EXPECT_EQ(ctsurg::sim::model_label(s), "fem mooney_rivlin+neo_hookean (dynamic)");
+  expect_error(replaced(base, "5: {preset: liver}", "5: {preset: spleen}"), "f.yaml: material.labels.5.preset: unknown material preset 'spleen'");
+  expect_error(replaced(base, "5: {preset: liver}", "liver: {preset: liver}"), "material.labels.liver: a tet label is a whole number from 1 to 65535");
+  expect_error(replaced(base, "5: {preset: liver}", "5: {poisson_ratio: 0.3}"), "material.labels.5: give a preset or youngs_modulus_pa");
+  expect_error(replaced(base, "5: {preset: liver}", "5: {preset: liver, poisson_ratio: 0.6}"), "material.labels.5.poisson_ratio: must be in (-1, 0.5)");
+  expect_error(replaced(base, "5: {preset: liver}", "5: {preset: liver, damping_per_s: 3}"), "material.labels.5.damping_per_s: unknown key");
+  expect_error(replaced(base, "  damping_per_s: 10\n", "  preset: liver\n"), "material.preset: with material.labels each label gives its own material");
+  expect_error(replaced(base, "c01_pa: 200", "c01_pa: 200, youngs_modulus_pa: 3"), "material.labels.2.youngs_modulus_pa: mooney_rivlin's stiffness comes from its constants");
+  // Inclusions: spheres of another material.
+  const std::string inclusion = replaced(base, "  damping_per_s: 10\n",
+                                         "  damping_per_s: 10\n  inclusions:\n    - {sphere: {at_fraction: [0.5, 0.5, 0.5], radius_mm: 8}, preset: tumour}\n");
+  const auto si = parse_scenario(inclusion, "f.yaml", "/b");
+  ASSERT_EQ(si.inclusions.size(), 1u);
+  EXPECT_EQ(si.inclusions[0].centre.kind, ctsurg::sim::PointSpec::Kind::at_fraction);
+  EXPECT_EQ(si.inclusions[0].radius_mm, 8);
+  EXPECT_EQ(si.inclusions[0].material.youngs_modulus_pa, 40e3);
+  EXPECT_EQ(si.inclusions[0].law, ctsurg::sim::FemLaw::neo_hookean);
+  EXPECT_EQ(si.inclusions[0].field, "material.inclusions[0]");
+  expect_error(replaced(inclusion, "radius_mm: 8", "radius_mm: -8"), "material.inclusions[0].sphere.radius_mm");
+  expect_error(replaced(inclusion, "at_fraction: [0.5, 0.5, 0.5], ", ""), "material.inclusions[0].sphere: give exactly one of position_mm, at_fraction");
+  expect_error(replaced(inclusion, "{sphere: {at_fraction: [0.5, 0.5, 0.5], radius_mm: 8}, ", "{"), "material.inclusions[0].sphere: missing");
+  const std::string springs = "ctsurg_scenario: 1\nmodel: {kind: spring_grid, grid: g.h5}\nmaterial: {labels: {1: {preset: kidney}}}\n"
+                              "time: {duration_s: 1}\noutput: {trajectory: o.h5}\n";
+  expect_error(springs, "f.yaml: material.labels: only for kind: fem");
 }
 
 TEST(Scenario, RenderRequestsAreChecked) {

@@ -269,6 +269,22 @@ TEST(ScenarioRun, FemStaticAndDynamicAgreeAndTheGrabIsPrescribed) {
   EXPECT_LT(worst, 0.05);
 }
 
+namespace {
+
+// The bar's tet mesh (write_bar_tet_mesh) with its halves labelled: 1 where a tet's centroid has x < 27
+// mm, 2 beyond.
+void write_two_label_bar(const fs::path& dir) {
+  TetMesh mesh = tet_mesh_of(fem_box_mesh({8, 2, 2}, {32, 8, 8}, {11, -19, 31}));
+  for (size_t e = 0; e < mesh.tet_labels.size(); ++e) {
+    double cx = 0;
+    for (size_t k = 0; k < 4; ++k) cx += 0.25 * mesh.nodes[3 * static_cast<size_t>(mesh.tets[4 * e + k])];
+    mesh.tet_labels[e] = cx < 27 ? 1 : 2;
+  }
+  write_tet_mesh_file(dir / "tetmesh.h5", mesh, ctsurg::test::test_provenance());
+}
+
+}  // namespace
+
 // Two organs in contact, as data_samples/scenarios/abdomen_contact.yaml on the bar: its halves labelled 1
 // and 2, separated by contact.bodies.labels, the left end fixed and the right end pushed 0.8 mm into the
 // left half. Without a surface file the trajectory draws the tet mesh's boundary: each half's own 80
@@ -276,13 +292,7 @@ TEST(ScenarioRun, FemStaticAndDynamicAgreeAndTheGrabIsPrescribed) {
 // each other and each body keeps its volume, while the left half is pushed.
 TEST(ScenarioRun, FemTwoBodiesByLabelPushedTogetherStayApartAndKeepTheirVolumes) {
   TempDir dir;
-  TetMesh mesh = tet_mesh_of(fem_box_mesh({8, 2, 2}, {32, 8, 8}, {11, -19, 31}));
-  for (size_t e = 0; e < mesh.tet_labels.size(); ++e) {
-    double cx = 0;
-    for (size_t k = 0; k < 4; ++k) cx += 0.25 * mesh.nodes[3 * static_cast<size_t>(mesh.tets[4 * e + k])];
-    mesh.tet_labels[e] = cx < 27 ? 1 : 2;
-  }
-  write_tet_mesh_file(dir.path() / "tetmesh.h5", mesh, ctsurg::test::test_provenance());
+  write_two_label_bar(dir.path());
   const std::string text =
       "ctsurg_scenario: 1\nmodel: {kind: fem, tetmesh: tetmesh.h5, solver: dynamic}\n"
       "material: {law: neo_hookean, youngs_modulus_pa: 20000, poisson_ratio: 0.3, damping_per_s: 200}\n"
@@ -307,6 +317,68 @@ TEST(ScenarioRun, FemTwoBodiesByLabelPushedTogetherStayApartAndKeepTheirVolumes)
   for (int64_t v = 0; v < t.vertex_count(); ++v)
     if (std::abs(t.rest_vertices[static_cast<size_t>(3 * v)] - 27) < 1e-4) pushed = std::min(pushed, double(last[3 * v]) - 27);
   EXPECT_LT(pushed, -0.3);
+}
+
+// Each organ its own material (material.labels): the bar's halves labelled 1 (x < 27) and 2, pulled
+// at the right end with the left end held. A soft left half and a stiff right one take the stretch in
+// the soft half: the interface moves further (series springs: E2 / (E1 + E2) of a uniform pull, 0.8
+// here, against 0.5 for one material; the grab's few nodes make it less uniform). A label without a
+// material, or a material for a label the mesh lacks, is refused naming the field; so is an inclusion
+// that holds no element.
+TEST(ScenarioRun, FemEachLabelItsOwnMaterial) {
+  TempDir dir;
+  write_two_label_bar(dir.path());
+  const auto text = [](const std::string& material) {
+    return "ctsurg_scenario: 1\nmodel: {kind: fem, tetmesh: tetmesh.h5, solver: static}\nmaterial: " + material + "\n"
+           "fixed: [{box_fraction: {min: [0, 0, 0], max: [0.02, 1, 1]}}]\n"
+           "tools:\n  - grab: {radius_mm: 4.5, path: [{t: 0, position_mm: [43, -15, 35]}, {t: 0.1, offset_mm: [2, 0, 0]}]}\n"
+           "time: {duration_s: 0.1}\noutput: {trajectory: out.h5, frame_interval_s: 0.1}\n";
+  };
+  const auto interface_x = [&](const std::string& material) {
+    const Trajectory t = run_scenario(parse_scenario(text(material), dir.path() / "s.yaml", dir.path()));
+    EXPECT_EQ(t.model, "fem linear (static)");
+    const float* last = t.frame_vertices(t.frame_count() - 1);
+    double sum = 0;
+    int count = 0;
+    for (int64_t v = 0; v < t.vertex_count(); ++v)
+      if (std::abs(t.rest_vertices[static_cast<size_t>(3 * v)] - 27) < 1e-4) sum += double(last[3 * v]) - 27, ++count;
+    EXPECT_GT(count, 0);
+    return sum / count;
+  };
+  const double mixed = interface_x("{law: linear, labels: {1: {youngs_modulus_pa: 10000}, 2: {youngs_modulus_pa: 40000}}}");
+  const double uniform = interface_x("{law: linear, labels: {1: {youngs_modulus_pa: 10000}, 2: {youngs_modulus_pa: 10000}}}");
+  const double single = interface_x("{law: linear, youngs_modulus_pa: 10000}");
+  EXPECT_EQ(uniform, single);  // two labels of one material: the one-material model, bit for bit
+  EXPECT_GT(uniform, 0.2);
+  EXPECT_GT(mixed, 1.25 * uniform);
+  EXPECT_LT(mixed, 2.0);
+  // An inclusion (material.inclusions) whose sphere holds the centroids of exactly the right half's tets
+  // (centre x = 35, radius 9 mm; the centroids lie within 2.7 mm of the axis) is the labels' model: the
+  // same result, bit for bit.
+  const double included = interface_x("{law: linear, youngs_modulus_pa: 10000, inclusions: [{sphere: {at_fraction: [0.75, 0.5, 0.5], "
+                                      "radius_mm: 9}, youngs_modulus_pa: 40000}]}");
+  EXPECT_EQ(included, mixed);
+  // A smaller one, in the right half's middle, stiffens less.
+  const double smaller = interface_x("{law: linear, youngs_modulus_pa: 10000, inclusions: [{sphere: {at_fraction: [0.75, 0.5, 0.5], "
+                                     "radius_mm: 5}, youngs_modulus_pa: 40000}]}");
+  EXPECT_GT(smaller, 1.02 * uniform);
+  EXPECT_LT(smaller, mixed);
+  const auto error_of = [&](const std::string& material) -> std::string {
+    try {
+      (void)run_scenario(parse_scenario(text(material), dir.path() / "s.yaml", dir.path()));
+    } catch (const InputError& e) {
+      return e.what();
+    }
+    return "(accepted)";
+  };
+  const std::string missing = error_of("{law: linear, labels: {1: {youngs_modulus_pa: 10000}}}");
+  EXPECT_NE(missing.find("s.yaml: material.labels: the tet mesh's label 2 has no material (its labels: 1, 2)"), std::string::npos) << missing;
+  const std::string extra = error_of("{law: linear, labels: {1: {preset: liver}, 2: {preset: kidney}, 7: {preset: tumour}}}");
+  EXPECT_NE(extra.find("s.yaml: material.labels.7: the tet mesh"), std::string::npos) << extra;
+  EXPECT_NE(extra.find("has no label 7 (its labels: 1, 2)"), std::string::npos) << extra;
+  const std::string outside = error_of("{law: linear, youngs_modulus_pa: 10000, inclusions: [{sphere: {position_mm: [0, 0, 0], radius_mm: 2}, "
+                                       "preset: tumour}]}");
+  EXPECT_NE(outside.find("s.yaml: material.inclusions[0].sphere: holds no element of the tet mesh"), std::string::npos) << outside;
 }
 
 namespace {

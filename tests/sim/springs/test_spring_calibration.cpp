@@ -161,13 +161,20 @@ TEST(SpringCalibration, TetEdgeSpringsStoreTheContinuumEnergyInTheMean) {
 TEST(MaterialPresets, NamedPresetsAndBadMaterials) {
   EXPECT_EQ(material_preset("liver").youngs_modulus_pa, 5.5e3);
   EXPECT_EQ(material_preset("myocardium").density, 1.06e-3);
-  EXPECT_EQ(material_presets().size(), 4u);
+  EXPECT_EQ(material_presets().size(), 7u);
+  // The stiff inclusion is stiffer than every organ's parenchyma; fat is the softest.
+  for (const Material& m : material_presets()) {
+    if (m.name != "tumour" && m.name != "vessel_wall") EXPECT_LT(m.youngs_modulus_pa, material_preset("tumour").youngs_modulus_pa) << m.name;
+    if (m.name != "fat") EXPECT_GT(m.youngs_modulus_pa, material_preset("fat").youngs_modulus_pa) << m.name;
+    EXPECT_FALSE(m.source.empty()) << m.name;
+    EXPECT_NO_THROW(validate_material(m)) << m.name;
+  }
   try {
     (void)material_preset("bone", "s.yaml", "material.preset");
     ADD_FAILURE();
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("s.yaml: material.preset: unknown material preset 'bone' (known: myocardium, liver, "
-                                         "kidney, soft_tissue)"),
+                                         "kidney, vessel_wall, fat, tumour, soft_tissue)"),
               std::string::npos)
         << e.what();
   }

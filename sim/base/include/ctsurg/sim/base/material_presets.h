@@ -18,7 +18,8 @@ struct Material {
   std::string source;           // where the values come from (one line)
 };
 
-// The presets: myocardium, liver, kidney, soft_tissue (a generic default).
+// The presets: myocardium, liver, kidney, vessel_wall, fat, tumour (a stiff inclusion), soft_tissue (a
+// generic default).
 const std::vector<Material>& material_presets();
 // The preset called `name`; InputError(file, field, ...) listing the known names otherwise.
 Material material_preset(const std::string& name, const std::string& file = "material",

@@ -48,12 +48,12 @@ namespace ctsurg::sim {
 class FemDeviceDynamics;  // src/fem_device_dynamics.h: the Backend::cuda state (no CUDA types here)
 
 struct FemCriticalStep {
-  double critical = 0;        // s, min_e h_e / c
+  double critical = 0;        // s, min_e h_e / c_e (c_e: the dilatational wave speed of e's material)
   double safety_factor = 0.5;
   double dt = 0;              // s, safety_factor * critical
   int32_t element = -1;       // the element that sets it
   double length = 0;          // mm, its h_e
-  double wave_speed = 0;      // mm/s, c
+  double wave_speed = 0;      // mm/s, its c_e
 };
 
 // Throws InputError("fem critical step", "safety_factor", ...) unless 0 < safety_factor <= 1.

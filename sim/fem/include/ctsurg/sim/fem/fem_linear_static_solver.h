@@ -61,7 +61,7 @@ struct FemLinearSolverStats {
 
 class FemLinearStaticSolver {
  public:
-  // model.material.law must be FemLaw::linear; supports.fixed_nodes and
+  // every material of the model must be FemLaw::linear; supports.fixed_nodes and
   // supports.fixed_components are held at zero for every solve and must remove all rigid motions on
   // their own (grabs come and go with each solve); supports.prescribed_* must be empty. Throws
   // InputError("fem linear solver", field, ...): "material", "fixed_nodes", "fixed_components",

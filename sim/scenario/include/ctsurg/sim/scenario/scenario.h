@@ -146,6 +146,26 @@ struct VesselSpec {
   int newton_iterations = 6;      // Gauss-Newton iterations per step at most, [1, 100]
 };
 
+// kind: fem, material.labels: one tet label's material (its law, preset and values, the law's constants).
+struct LabelMaterial {
+  uint16_t label = 0;
+  Material material;
+  FemLaw law = FemLaw::neo_hookean;
+  std::array<double, kFemLawConstants> constants{};
+  std::string field;  // "material.labels.2", for messages
+};
+
+// kind: fem, material.inclusions: a sphere of another material inside the tissue (a tumour, a
+// calcification): the elements whose centroid lies inside it take its material, over their label's.
+struct InclusionMaterial {
+  PointSpec centre;        // position_mm (LPS) or at_fraction (of the tet mesh's rest bounding box)
+  double radius_mm = 0;    // > 0
+  Material material;
+  FemLaw law = FemLaw::neo_hookean;
+  std::array<double, kFemLawConstants> constants{};
+  std::string field;       // "material.inclusions[0]", for messages
+};
+
 // Bounds of the time section (scenario.cpp): simulated time, the smallest step, output frames.
 inline constexpr double kMaxDurationS = 86400;
 inline constexpr double kMinStepS = 1e-9;
@@ -169,7 +189,9 @@ struct Scenario {
   int fem_order = 1;  // kind: fem; elements: linear (1, 4-node tets) | quadratic (2, 10-node; static and implicit)
   bool mass_from_fraction = false;
   bool close_cuts = true;           // spring models: close the holes a cut leaves in the surface (hole_filling.h)
-  Material material;                // preset, possibly with explicit overrides
+  Material material;                // preset, possibly with explicit overrides (with material.labels: the first label's)
+  std::vector<LabelMaterial> label_materials;  // kind: fem, material.labels (increasing labels); empty: one material
+  std::vector<InclusionMaterial> inclusions;   // kind: fem, material.inclusions (in order: a later one wins)
   double damping_per_s = 0;         // mass-proportional damping rate alpha, 1/s (Verlet factor alpha dt)
   double stiffness_damping_s = 0;   // fem implicit: Rayleigh stiffness damping beta, s
   std::array<double, 3> gravity{0, 0, 0};  // mm/s^2, LPS
