@@ -30,8 +30,8 @@ const std::vector<Material>& material_presets() {
       {"kidney", 10e3, 0.45, 1.05e-3,
        "renal cortex E ~5-15 kPa (shear-wave elastography of healthy kidneys); density ICRU 46"},
       {"vessel_wall", 1.0e6, 0.45, 1.06e-3,
-       "abdominal aortic wall, small-strain E ~0.5-2 MPa, stiffening with age (biaxial tests, Vande Geest, Sacks and Vorp "
-       "2006); density ICRU 46"},
+       "abdominal aortic wall, small-strain E of order 1 MPa, stiffening with age and aneurysm (biaxial tests, Vande Geest, "
+       "Sacks and Vorp 2006); density ICRU 46"},
       {"fat", 3.25e3, 0.45, 0.95e-3,
        "adipose tissue E 3.25 +- 0.91 kPa (indentation of 169 samples, Samani, Zubovits and Plewes 2007); density ICRU 46 "
        "adipose 0.95 g/cm^3"},

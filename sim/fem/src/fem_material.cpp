@@ -35,6 +35,9 @@ std::string number(double v) {
   return s.str();
 }
 
+// mu and lambda of E and nu (unchecked: validate_fem_material's callers and it itself).
+LameParameters lame_of(double e, double nu) { return {e / (2 * (1 + nu)), e * nu / ((1 + nu) * (1 - 2 * nu))}; }
+
 bool valid_law(FemLaw law) {
   const auto id = static_cast<int32_t>(law);
   return id >= 0 && id < kFemLawCount;
@@ -98,8 +101,9 @@ FemMaterial fem_material_from_constants(FemLaw law, const std::array<double, kFe
 namespace {
 
 void check_law_problem(const FemMaterial& m, const char* where) {
-  const double e = m.youngs_modulus, nu = m.poisson_ratio;
-  const FemLawParameters<double> k{m.law, e / (2 * (1 + nu)), e * nu / ((1 + nu) * (1 - 2 * nu)), {m.constants[0], m.constants[1]}};
+  const double nu = m.poisson_ratio;
+  const LameParameters l = lame_of(m.youngs_modulus, nu);
+  const FemLawParameters<double> k{m.law, l.mu, l.lambda, {m.constants[0], m.constants[1]}};
   const FemLawProblem p = fem_visit_law(m.law, ProblemOf{k});
   if (p.problem == nullptr) return;
   std::string constants;
@@ -147,8 +151,7 @@ void validate_fem_material(const FemMaterial& m, const char* where) {
 
 LameParameters lame_parameters(const FemMaterial& m) {
   validate_fem_material(m);
-  const double e = m.youngs_modulus, nu = m.poisson_ratio;
-  return {e / (2 * (1 + nu)), e * nu / ((1 + nu) * (1 - 2 * nu))};
+  return lame_of(m.youngs_modulus, m.poisson_ratio);
 }
 
 FemLawParameters<double> fem_law_parameters(const FemMaterial& m) {

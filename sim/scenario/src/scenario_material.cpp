@@ -23,6 +23,24 @@ std::vector<std::pair<std::string, FemLaw>> law_constant_fields() {
 
 const std::vector<std::string> kValueFields = {"preset", "youngs_modulus_pa", "poisson_ratio", "density_g_per_cm3"};
 
+// The fields of one material: its values and every law's constants (and "law" when with_law).
+std::vector<std::string> material_fields(bool with_law) {
+  std::vector<std::string> fields = kValueFields;
+  if (with_law) fields.push_back("law");
+  for (const auto& [field, law] : law_constant_fields()) fields.push_back(field);
+  return fields;
+}
+
+// f's law (f.law, checked), or default_law when f gives none.
+FemLaw law_of(const YamlField& f, ModelKind model, FemLaw default_law) {
+  if (!f.has("law")) return default_law;
+  if (model != ModelKind::fem) f.child("law").fail("only for kind: fem (the spring models' law is their springs, the vessel's its rod; docs/sim.md)");
+  const std::string text = f.child("law").text();
+  const auto named = fem_law_named(text);
+  if (!named) f.child("law").fail("unknown law '" + text + "' (the laws: " + fem_law_names() + ")");
+  return *named;
+}
+
 FemMaterial fem_material(FemLaw law, const Material& m, const std::array<double, kFemLawConstants>& constants) {
   FemMaterial material;
   material.law = law;
@@ -39,16 +57,7 @@ void parse_material_fields(const YamlField& f, ModelKind model, FemLaw default_l
                            std::array<double, kFemLawConstants>& constants) {
   const std::string& name = f.file();
   const auto constant_fields = law_constant_fields();
-  law = default_law;
-  if (f.has("law")) {
-    if (model != ModelKind::fem) {
-      f.child("law").fail("only for kind: fem (the spring models' law is their springs, the vessel's its rod; docs/sim.md)");
-    }
-    const std::string text = f.child("law").text();
-    const auto named = fem_law_named(text);
-    if (!named) f.child("law").fail("unknown law '" + text + "' (the laws: " + fem_law_names() + ")");
-    law = *named;
-  }
+  law = law_of(f, model, default_law);
   const FemLawInfo& info = fem_law_info(law);
   for (const auto& [field, owner] : constant_fields) {
     if (f.has(field) && (model != ModelKind::fem || owner != law)) {
@@ -96,11 +105,11 @@ void parse_material_fields(const YamlField& f, ModelKind model, FemLaw default_l
 }  // namespace
 
 void parse_material_section(const YamlField& mat, Scenario& s) {
-  std::vector<std::string> known = {"law", "damping_per_s", "stiffness_damping_s", "labels", "inclusions"};
-  known.insert(known.end(), kValueFields.begin(), kValueFields.end());
-  const auto constant_fields = law_constant_fields();
-  for (const auto& [field, law] : constant_fields) known.push_back(field);
+  std::vector<std::string> known = material_fields(true);
+  known.insert(known.end(), {"damping_per_s", "stiffness_damping_s", "labels", "inclusions"});
   mat.only(known);
+  // The section's law: its one material's, or the default of its labels and inclusions.
+  const FemLaw section_law = law_of(mat, s.model, s.material_law);
 
   s.label_materials.clear();
   if (mat.has("labels")) {
@@ -108,20 +117,9 @@ void parse_material_section(const YamlField& mat, Scenario& s) {
     const YamlField labels = mat.child("labels");
     if (s.model != ModelKind::fem) labels.fail("only for kind: fem (the spring models and the vessel take one material)");
     if (!labels.is_map()) labels.fail("a map of tet labels to materials, e.g. {2: {preset: kidney}, 5: {preset: liver}}");
-    for (const std::string& field : kValueFields)
+    for (const std::string& field : material_fields(false))
       if (mat.has(field)) mat.child(field).fail("with material.labels each label gives its own material: move it into the labels");
-    for (const auto& [field, law] : constant_fields)
-      if (mat.has(field)) mat.child(field).fail("with material.labels each label gives its own material: move it into the labels");
-    FemLaw default_law = s.material_law;
-    if (mat.has("law")) {
-      const std::string text = mat.child("law").text();
-      const auto named = fem_law_named(text);
-      if (!named) mat.child("law").fail("unknown law '" + text + "' (the laws: " + fem_law_names() + ")");
-      default_law = *named;
-    }
-    std::vector<std::string> entry_keys = {"law"};
-    entry_keys.insert(entry_keys.end(), kValueFields.begin(), kValueFields.end());
-    for (const auto& [field, law] : constant_fields) entry_keys.push_back(field);
+    const std::vector<std::string> entry_keys = material_fields(true);
     std::map<uint16_t, LabelMaterial> by_label;
     for (const std::string& key : labels.keys()) {
       const YamlField entry = labels.child(key);
@@ -132,7 +130,7 @@ void parse_material_section(const YamlField& mat, Scenario& s) {
       LabelMaterial lm;
       lm.label = static_cast<uint16_t>(id);
       lm.field = entry.path();
-      parse_material_fields(entry, s.model, default_law, lm.material, lm.law, lm.constants);
+      parse_material_fields(entry, s.model, section_law, lm.material, lm.law, lm.constants);
       if (!by_label.emplace(lm.label, lm).second) entry.fail("label " + std::to_string(id) + " is given twice");
     }
     if (by_label.empty()) labels.fail("names no label");
@@ -152,11 +150,8 @@ void parse_material_section(const YamlField& mat, Scenario& s) {
     const YamlField list = mat.child("inclusions");
     if (s.model != ModelKind::fem) list.fail("only for kind: fem (the spring models and the vessel take one material)");
     if (!list.is_sequence()) list.fail("a list of spheres of other materials, e.g. [{sphere: {at_fraction: [0.5, 0.5, 0.5], radius_mm: 8}, preset: tumour}]");
-    FemLaw default_law = s.material_law;
-    if (mat.has("law")) default_law = *fem_law_named(mat.child("law").text());  // checked above
-    std::vector<std::string> keys = {"sphere", "law"};
-    keys.insert(keys.end(), kValueFields.begin(), kValueFields.end());
-    for (const auto& [field, law] : constant_fields) keys.push_back(field);
+    std::vector<std::string> keys = material_fields(true);
+    keys.push_back("sphere");
     for (const YamlField& item : list.items()) {
       item.only(keys);
       InclusionMaterial inc;
@@ -165,7 +160,7 @@ void parse_material_section(const YamlField& mat, Scenario& s) {
       sphere.only({"position_mm", "at_fraction", "radius_mm"});
       inc.centre = point_of(sphere, false);
       inc.radius_mm = sphere.child("radius_mm").positive();
-      parse_material_fields(item, s.model, default_law, inc.material, inc.law, inc.constants);
+      parse_material_fields(item, s.model, section_law, inc.material, inc.law, inc.constants);
       s.inclusions.push_back(inc);
     }
     if (s.label_materials.size() + s.inclusions.size() + (s.label_materials.empty() ? 1 : 0) > static_cast<size_t>(kFemModelMaxMaterials)) {

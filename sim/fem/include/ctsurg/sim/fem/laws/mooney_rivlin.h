@@ -9,7 +9,7 @@
 // Linearised at rest it is linear elasticity with shear modulus mu = 2 (c10 + c01) and first Lame
 // parameter lambda' + 4 c01, so lambda' = lambda - 4 c01 with lambda the small-strain Lame parameter of
 // mu and Poisson's ratio: the law, the linear law and the critical time step agree for small strains.
-// The material needs lambda' > 0 (else the energy falls without bound under compression: problem()). Soft tissue fits: liver and kidney c10 ~ 1-4 kPa, c01 ~ 0.1-1 kPa (docs/fem.md).
+// The material needs lambda' > 0 (else the energy falls without bound under compression: problem()).
 // Anchor: SOFA's hyperelastic material/MooneyRivlin.h (an isochoric form of the same invariants).
 #pragma once
 
