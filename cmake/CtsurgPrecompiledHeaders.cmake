@@ -1,7 +1,7 @@
 # Precompiled headers for ctsurg's own libraries: the third-party and standard headers that nearly
 # every source reaches through ctsurg/core (Eigen through volume.h, nlohmann::json through
 # provenance.h) are parsed once per library instead of once per file: 40-75 % of a file's compile
-# time on the 2-core CI machine, which builds everything twice (release and ASan).
+# time on the 2-core CI machine.
 #
 # ctsurg_library_precompiled_headers(<target> [<extra header>...]): one PCH per library, built with
 # that library's own flags, so GCC accepts it for each of its files. Not for the fuzz build (clang,

@@ -7,15 +7,14 @@
 #   bench/gpu/pack_prebuilt.sh BUILD HEART_DIR OUT      e.g. build-cuda build/demo/heart build-gpu-carry
 #
 # BUILD: configured with -DCTSURG_CUDA=ON -DCMAKE_CUDA_ARCHITECTURES=90 (the device's) and these targets
-# built: test_backend test_device_simulation test_fem_device test_scenario_gpu test_collision_device
-# bench_device_simulation bench_fem_device bench_live_session ctsurg-sim.
+# built: test_sim (for its Backend tests) test_sim_gpu bench_device_simulation bench_fem_device
+# bench_live_session ctsurg-sim.
 # BLAS: the reference BLAS and LAPACK go instead of OpenBLAS (a tenth of the size; CHOLMOD's speed
 # there is not what the GPU run measures).
 set -euo pipefail
 [[ $# -eq 3 ]] || { sed -n 2,12p "$0" >&2; exit 2; }
 build=$1 heart=$2 out=$3
-programs=(test_backend test_device_simulation test_fem_device test_scenario_gpu test_collision_device
-          bench_device_simulation bench_fem_device bench_live_session ctsurg-sim)
+programs=(test_sim test_sim_gpu bench_device_simulation bench_fem_device bench_live_session ctsurg-sim)
 rm -rf "$out"
 mkdir -p "$out/bin" "$out/lib" "$out/heart"
 for p in "${programs[@]}"; do

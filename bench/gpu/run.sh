@@ -32,9 +32,7 @@ results=()
 nvidia-smi --query-gpu=name,driver_version,memory.total,clocks.max.memory --format=csv >"$build/nvidia-smi.txt" 2>&1 || true
 step configure cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release -DCTSURG_CUDA=ON -DCTSURG_HTML_VIEWER=OFF \
   "-DCMAKE_CUDA_ARCHITECTURES=$archs"
-step build cmake --build "$build" -j "$jobs" --target test_device_simulation test_backend test_spring_mass_step \
-  test_explicit_spring_model test_sphere_tools test_spring_cutting test_surface_coupling test_scenario_gpu ctsurg-sim \
-  test_fem_device test_fem_explicit_dynamics test_fem_static_solver bench_device_simulation bench_fem_device \
+step build cmake --build "$build" -j "$jobs" --target test_sim_gpu test_sim ctsurg-sim bench_device_simulation bench_fem_device \
   ctsurg-import ctsurg-grid ctsurg-surface ctsurg-normalmap ctsurg-tetmesh ctsurg-render
 step tests-gpu ctest --test-dir "$build" -L gpu --output-on-failure --no-tests=error
 step tests-cpu-kernels ctest --test-dir "$build" -L unit -R 'Backend|SpringMassStep|ExplicitSpring|SphereTools|SpringCutting|SurfaceCoupling|FemExplicitDynamics|FemStaticSolver' --output-on-failure
@@ -48,10 +46,12 @@ else
   sanitizer=""
 fi
 if [ -n "$sanitizer" ]; then
-  for test in test_device_simulation test_fem_device; do
-    step "memcheck-$test" "$sanitizer" --tool memcheck --error-exitcode 1 --leak-check full "$build/bin/$test"
-    step "racecheck-$test" "$sanitizer" --tool racecheck --error-exitcode 1 "$build/bin/$test"
-    step "synccheck-$test" "$sanitizer" --tool synccheck --error-exitcode 1 "$build/bin/$test"
+  # The device tests of test_sim_gpu: the spring models' (DeviceSimulationTest) and the FEM's (FemDeviceTest).
+  for suite in DeviceSimulationTest FemDeviceTest; do
+    for tool in memcheck racecheck synccheck; do
+      leak=(); [[ $tool == memcheck ]] && leak=(--leak-check full)
+      step "$tool-$suite" "$sanitizer" --tool "$tool" --error-exitcode 1 "${leak[@]}" "$build/bin/test_sim_gpu" "--gtest_filter=$suite.*"
+    done
   done
 else
   results+=("| compute-sanitizer | **not found** |"); status=1

@@ -28,9 +28,10 @@ step() {  # step NAME SECONDS COMMAND...
   fi
   grep -E "PASSED|FAILED|SKIPPED|ERROR SUMMARY|\| " "$out/$name.log" | tail -n 12
 }
-for t in test_backend test_device_simulation test_fem_device test_collision_device test_scenario_gpu; do
-  step "$t" 180 "$pack/bin/$t" --gtest_brief=1
-done
+# test_sim_gpu holds every gpu test (DeviceSimulationTest, FemDeviceTest, CollisionDeviceTest, ScenarioGpu);
+# test_sim's Backend tests check what the device reports.
+step test_backend 180 "$pack/bin/test_sim" --gtest_brief=1 --gtest_filter='Backend.*'
+step test_sim_gpu 300 "$pack/bin/test_sim_gpu" --gtest_brief=1
 # No gpu test may be skipped here: a skip means the device was not found.
 if grep -h "SKIPPED \] [A-Za-z]*\." "$out"/test_*.log | grep -qv "WithoutADevice"; then echo "a gpu test was skipped: the device was not seen"; status=1; fi
 for backend in cuda cpu; do
@@ -41,7 +42,7 @@ step bench_device_simulation 120 "$pack/bin/bench_device_simulation" --benchmark
 step bench_fem_device 120 "$pack/bin/bench_fem_device" --benchmark_min_time=0.1
 sanitizer=$(command -v compute-sanitizer || echo /usr/local/cuda/bin/compute-sanitizer)
 for tool in memcheck racecheck synccheck; do
-  step "$tool-test_device_simulation" 120 "$sanitizer" --tool "$tool" --error-exitcode 1 "$pack/bin/test_device_simulation" --gtest_brief=1
+  step "$tool-test_device_simulation" 120 "$sanitizer" --tool "$tool" --error-exitcode 1 "$pack/bin/test_sim_gpu" --gtest_brief=1 --gtest_filter='DeviceSimulationTest.*'
 done
-step memcheck-test_fem_device 120 "$sanitizer" --tool memcheck --error-exitcode 1 "$pack/bin/test_fem_device" --gtest_brief=1
+step memcheck-test_fem_device 120 "$sanitizer" --tool memcheck --error-exitcode 1 "$pack/bin/test_sim_gpu" --gtest_brief=1 --gtest_filter='FemDeviceTest.*'
 exit $status

@@ -2,6 +2,7 @@
 #include "ctsurg/mesh/tetrahedral_meshing.h"
 
 #include "ctsurg/core/error.h"
+#include "ctsurg/core/elapsed_seconds.h"
 #include "ctsurg/mesh/tet_mesh_quality.h"
 
 // GCC 12 reports false -Wmaybe-uninitialized in boost::optional inside CGAL's Mesh_3 (the
@@ -118,10 +119,6 @@ CGAL::Image_3 make_image(const Cropped& c, const Eigen::Vector3d& spacing) {
   if (im == nullptr) throw RuntimeError("CGAL image allocation failed");
   std::memcpy(im->data, c.voxels.data(), c.voxels.size() * sizeof(uint16_t));
   return CGAL::Image_3(im);  // owns im
-}
-
-double seconds_since(std::chrono::steady_clock::time_point t) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
 }
 
 const char* optimiser_name(TetOptimiser o) {

@@ -41,7 +41,7 @@ const gdcm::Tag kSeriesUid(0x0020, 0x000e), kSeriesNumber(0x0020, 0x0011), kDesc
     kTransferSyntax(0x0002, 0x0010), kPixelData(0x7fe0, 0x0010), kSamplesPerPixel(0x0028, 0x0002),
     kBitsAllocated(0x0028, 0x0100);
 
-std::string trim(std::string s) {
+std::string trim_dicom_padding(std::string s) {
   while (!s.empty() && (s.back() == ' ' || s.back() == '\0')) s.pop_back();
   std::size_t b = 0;
   while (b < s.size() && s[b] == ' ') ++b;
@@ -52,7 +52,7 @@ std::vector<std::string> split_backslash(const std::string& s) {
   std::vector<std::string> out;
   std::stringstream in(s);
   std::string item;
-  while (std::getline(in, item, '\\')) out.push_back(trim(item));
+  while (std::getline(in, item, '\\')) out.push_back(trim_dicom_padding(item));
   return out;
 }
 
@@ -263,11 +263,11 @@ std::vector<DicomSeriesInfo> scan_dicom_folder(const fs::path& folder, std::vect
       skip(name, "no ImagePositionPatient/ImageOrientationPatient");
       continue;
     }
-    auto& s = series[trim(uid)];
-    s.series_uid = trim(uid);
+    auto& s = series[trim_dicom_padding(uid)];
+    s.series_uid = trim_dicom_padding(uid);
     const auto value = [&](const gdcm::Tag& t) {
       const char* v = scan.GetValue(name.c_str(), t);
-      return v ? trim(v) : std::string();
+      return v ? trim_dicom_padding(v) : std::string();
     };
     s.series_number = value(kSeriesNumber);
     s.description = value(kDescription);

@@ -4,6 +4,7 @@
 #include "ctsurg/core/image_geometry.h"
 #include "ctsurg/core/input_file.h"
 #include "ctsurg/preprocess/detached_data_files.h"
+#include "header_text.h"
 
 #include <zlib.h>
 
@@ -34,12 +35,6 @@ const std::map<std::string, int>& element_sizes() {
   return sizes;
 }
 
-std::string trim(const std::string& s) {
-  const auto b = s.find_first_not_of(" \t\r");
-  if (b == std::string::npos) return {};
-  return s.substr(b, s.find_last_not_of(" \t\r") - b + 1);
-}
-
 bool is_true(const std::string& v) {
   std::string l = v;
   std::transform(l.begin(), l.end(), l.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
@@ -54,22 +49,22 @@ int64_t whole_number(const std::string& text, const std::string& name, const std
   } catch (const std::exception&) {
     used = 0;
   }
-  if (used == 0 || trim(text.substr(used)) != "" || v < lo || v > hi) {
+  if (used == 0 || trim_header_text(text.substr(used)) != "" || v < lo || v > hi) {
     throw InputError(name, field, "'" + text + "' is not a whole number in [" + std::to_string(lo) + ", " +
                                       std::to_string(hi) + "]");
   }
   return v;
 }
 
-struct Header {
+struct MetaImageHeader {
   std::map<std::string, std::string> fields;  // key -> value, as written
   uint64_t data_start = 0;                    // LOCAL: the byte after the ElementDataFile line
 };
 
-Header read_header(const fs::path& path, const std::string& name) {
+MetaImageHeader read_header(const fs::path& path, const std::string& name) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(name, "", "cannot be opened");
-  Header h;
+  MetaImageHeader h;
   std::string line;
   uint64_t position = 0;
   while (true) {
@@ -79,10 +74,10 @@ Header read_header(const fs::path& path, const std::string& name) {
     if (line.find('\0') != std::string::npos) throw InputError(name, "header", "binary bytes before ElementDataFile: not a MetaImage header");
     const auto eq = line.find('=');
     if (eq == std::string::npos) {
-      if (trim(line).empty()) continue;
-      throw InputError(name, "header", "line '" + trim(line).substr(0, 60) + "' is not 'Key = Value'");
+      if (trim_header_text(line).empty()) continue;
+      throw InputError(name, "header", "line '" + trim_header_text(line).substr(0, 60) + "' is not 'Key = Value'");
     }
-    const std::string key = trim(line.substr(0, eq)), value = trim(line.substr(eq + 1));
+    const std::string key = trim_header_text(line.substr(0, eq)), value = trim_header_text(line.substr(eq + 1));
     // MetaIO (ITK 5.2) copies keys and string values into 255-byte buffers with strcpy
     // (metaTypes.h MET_MAX_NAME_SIZE; metaObject.h m_ObjectTypeName, m_Comment, m_Name ...): longer ones
     // overflow them, so they are refused here, before ITK sees the file. ElementDataFile is a std::string.
@@ -173,7 +168,7 @@ std::vector<fs::path> verify_metaimage_file(const fs::path& path, bool data_file
                                             std::vector<std::string>* warnings) {
   const std::string name = path.string();
   check_input_file(path);
-  const Header h = read_header(path, name);
+  const MetaImageHeader h = read_header(path, name);
   const auto field = [&](const std::string& key) -> const std::string* {
     const auto it = h.fields.find(key);
     return it == h.fields.end() ? nullptr : &it->second;

@@ -98,7 +98,7 @@ class Fields {
 };
 
 // The fields ctsurg checks, the same for both versions of the format.
-struct Header {
+struct NiftiHeader {
   int version = 1;                    // 1 or 2
   std::size_t size = 348;             // sizeof_hdr
   bool swap = false;
@@ -131,7 +131,7 @@ constexpr Offsets kNifti2{4, 8, 16, 12, 14, 104, 168, 176, 184, 344, 348, 352, 4
 // The fields at `o`, stored as Dim (dim), Code (the xform codes), Real (pixdim, scaling, qform,
 // srow) and Offset (vox_offset): NIfTI-1 int16/int16/float32/float32, NIfTI-2 int64/int32/float64/int64.
 template <class Dim, class Code, class Real, class Offset>
-void read_fields(const Fields& f, const unsigned char* h, const Offsets& o, Header& hd) {
+void read_fields(const Fields& f, const unsigned char* h, const Offsets& o, NiftiHeader& hd) {
   hd.magic.assign(reinterpret_cast<const char*>(h + o.magic), o.magic_size);
   for (std::size_t i = 0; i < 8; ++i) hd.dim[i] = f.get<Dim>(o.dim + sizeof(Dim) * i);
   hd.datatype = f.get<int16_t>(o.datatype);
@@ -146,9 +146,9 @@ void read_fields(const Fields& f, const unsigned char* h, const Offsets& o, Head
   for (std::size_t i = 0; i < 12; ++i) hd.srow[i] = f.get<Real>(o.srow + sizeof(Real) * i);
 }
 
-Header parse_header(const unsigned char* h, std::size_t size, bool swap) {
+NiftiHeader parse_header(const unsigned char* h, std::size_t size, bool swap) {
   const Fields f(h, swap);
-  Header hd;
+  NiftiHeader hd;
   hd.size = size;
   hd.swap = swap;
   hd.version = size == 348 ? 1 : 2;
@@ -177,7 +177,7 @@ std::string number(double v) {
   return s.str();
 }
 
-void check_header(const Header& h, const std::string& name, std::vector<std::string>* warnings) {
+void check_header(const NiftiHeader& h, const std::string& name, std::vector<std::string>* warnings) {
   const auto fail = [&](const std::string& field, const std::string& problem) { throw InputError(name, field, problem); };
   const std::string want = h.version == 1 ? std::string("n+1\0", 4) : std::string("n+2\0\r\n\032\n", 8);
   if (h.magic != want) {
@@ -267,7 +267,7 @@ void check_header(const Header& h, const std::string& name, std::vector<std::str
 
 // Walks the extensions (NIfTI-1 standard, "extension" section): each esize a positive multiple of
 // 16, the chain ending at or before vox_offset.
-void check_extensions(ByteStream& in, const std::array<unsigned char, 4>& extender, const Header& h, uint64_t vox_offset,
+void check_extensions(ByteStream& in, const std::array<unsigned char, 4>& extender, const NiftiHeader& h, uint64_t vox_offset,
                       const std::string& name) {
   if (extender[0] == 0) return;
   while (in.position() + 8 <= vox_offset) {
@@ -327,7 +327,7 @@ void verify_nifti_file(const fs::path& path, std::vector<std::string>* warnings)
   if (in.read(head.data() + 4, size - 4) != size - 4) {
     throw InputError(name, "header", "the file ends inside the " + std::to_string(size) + "-byte header");
   }
-  const Header h = parse_header(head.data(), size, swap);
+  const NiftiHeader h = parse_header(head.data(), size, swap);
   check_header(h, name, warnings);
   std::array<unsigned char, 4> extender{};
   if (in.read(extender.data(), 4) != 4) throw InputError(name, "extension", "the file ends after the header");

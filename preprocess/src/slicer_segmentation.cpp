@@ -3,6 +3,7 @@
 #include "ctsurg/core/error.h"
 #include "ctsurg/core/input_file.h"
 #include "ctsurg/core/memory_guard.h"
+#include "header_text.h"
 
 #include <spdlog/fmt/fmt.h>
 #include <zlib.h>
@@ -23,12 +24,6 @@ namespace {
 std::string lower(std::string s) {
   std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
   return s;
-}
-
-std::string trim(const std::string& s) {
-  const auto b = s.find_first_not_of(" \t\r");
-  if (b == std::string::npos) return "";
-  return s.substr(b, s.find_last_not_of(" \t\r") - b + 1);
 }
 
 std::vector<std::string> words(const std::string& s) {
@@ -68,7 +63,7 @@ NrrdHeader parse_header(const std::string& bytes, const std::string& file) {
     if (kv != std::string::npos && (colon == std::string::npos || kv < colon)) {
       h.key_values[line.substr(0, kv)] = line.substr(kv + 2);
     } else if (colon != std::string::npos) {
-      h.fields[lower(trim(line.substr(0, colon)))] = trim(line.substr(colon + 2));
+      h.fields[lower(trim_header_text(line.substr(0, colon)))] = trim_header_text(line.substr(colon + 2));
     } else {
       throw InputError(file, "header", "'" + line.substr(0, 80) + "' is neither 'field: value' nor 'key:=value'");
     }
@@ -105,12 +100,12 @@ double parse_double(const std::string& text, const std::string& file, const std:
 
 // "(x,y,z)" -> vector.
 Eigen::Vector3d parse_vector(const std::string& text, const std::string& file, const std::string& field) {
-  std::string t = trim(text);
+  std::string t = trim_header_text(text);
   if (t.size() < 2 || t.front() != '(' || t.back() != ')') throw InputError(file, field, "'" + t + "' is not a vector (x,y,z)");
   t = t.substr(1, t.size() - 2);
   std::vector<std::string> parts;
   std::stringstream in(t);
-  for (std::string p; std::getline(in, p, ',');) parts.push_back(trim(p));
+  for (std::string p; std::getline(in, p, ',');) parts.push_back(trim_header_text(p));
   if (parts.size() != 3) throw InputError(file, field, "'" + text + "' does not have 3 components");
   return {parse_double(parts[0], file, field), parse_double(parts[1], file, field), parse_double(parts[2], file, field)};
 }
@@ -293,8 +288,8 @@ SlicerSegmentation read_slicer_segmentation(const std::filesystem::path& path, s
     s.index = k;
     s.id = get("ID");
     s.name = get("Name");
-    s.label_value = parse_int(trim(get("LabelValue")), file, field_of(k, "LabelValue"));
-    const int64_t layer = parse_int(trim(get("Layer")), file, field_of(k, "Layer"));
+    s.label_value = parse_int(trim_header_text(get("LabelValue")), file, field_of(k, "LabelValue"));
+    const int64_t layer = parse_int(trim_header_text(get("Layer")), file, field_of(k, "Layer"));
     if (layer < 0 || layer >= layers) {
       throw InputError(file, field_of(k, "Layer"), fmt::format("{} is not a layer in [0, {}]", layer, layers - 1));
     }

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <sstream>
 
 #include "ctsurg/core/error.h"
@@ -12,7 +13,6 @@ namespace ctsurg {
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr double kPerspectiveFovDeg = 30.0;
 
 ViewDirection named(const std::string& name, Eigen::Vector3d towards_eye, Eigen::Vector3d up) {
@@ -22,7 +22,7 @@ ViewDirection named(const std::string& name, Eigen::Vector3d towards_eye, Eigen:
 }  // namespace
 
 ViewDirection view_from_angles(double azimuth_deg, double elevation_deg) {
-  const double az = azimuth_deg * kPi / 180.0, el = elevation_deg * kPi / 180.0;
+  const double az = azimuth_deg * std::numbers::pi / 180.0, el = elevation_deg * std::numbers::pi / 180.0;
   ViewDirection v;
   std::ostringstream name;
   name << "az" << azimuth_deg << "_el" << elevation_deg;
@@ -84,7 +84,7 @@ Camera frame_camera(const BoundingSphere& sphere, const ViewDirection& view, Pro
   cam.projection_kind = projection;
   const double r = std::max(sphere.radius, 1e-3) * margin;
   const double aspect = double(width) / double(height);
-  const double half_fov = 0.5 * kPerspectiveFovDeg * kPi / 180.0;
+  const double half_fov = 0.5 * kPerspectiveFovDeg * std::numbers::pi / 180.0;
   // Distance at which the sphere just fits the smaller side of the perspective frustum.
   const double distance = projection == Projection::perspective ? r / std::sin(half_fov) : 4.0 * r;
   const Eigen::Vector3d forward = -view.towards_eye.normalized();

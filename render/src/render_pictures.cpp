@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <memory>
+#include <numbers>
 #include <set>
 #include <sstream>
 
@@ -14,8 +15,6 @@
 namespace ctsurg {
 
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
 
 std::string frame_tag(int64_t f) {
   char s[32];
@@ -180,8 +179,8 @@ void render_pictures(const RenderModel& model, const PictureRequest& request, co
   }
 
   const ViewDirection& view = request.view;
-  const double base_az = std::atan2(view.towards_eye.x(), -view.towards_eye.y()) * 180.0 / kPi;
-  const double base_el = std::asin(std::clamp(view.towards_eye.z(), -1.0, 1.0)) * 180.0 / kPi;
+  const double base_az = std::atan2(view.towards_eye.x(), -view.towards_eye.y()) * 180.0 / std::numbers::pi;
+  const double base_el = std::asin(std::clamp(view.towards_eye.z(), -1.0, 1.0)) * 180.0 / std::numbers::pi;
   const int pictures = request.turntable_steps > 0 ? request.turntable_steps : static_cast<int>(frames.size());
   for (int k = 0; k < pictures; ++k) {
     const int64_t f = request.turntable_steps > 0 ? frames.front() : frames[static_cast<std::size_t>(k)];

@@ -17,7 +17,7 @@
 //     the pictures are the same with 1 or 2 threads).
 //
 // Regenerate the goldens (after a deliberate change; look at them before committing):
-//   CTSURG_UPDATE_GOLDEN=1 build/bin/test_heart_goldens
+//   CTSURG_UPDATE_GOLDEN=1 build/bin/test_render_cli --gtest_filter='HeartGoldens.*'
 #include <gtest/gtest.h>
 
 #include <cstdlib>

@@ -5,7 +5,7 @@
 // identical, and sequences share one camera.
 //
 // Regenerate the goldens (after a deliberate change; look at them before committing):
-//   CTSURG_UPDATE_GOLDEN=1 build/bin/test_render_pictures
+//   CTSURG_UPDATE_GOLDEN=1 build/bin/test_render --gtest_filter='RenderPictures.*'
 #include <gtest/gtest.h>
 
 #include <algorithm>

@@ -11,21 +11,21 @@
 namespace ctsurg::sim {
 namespace {
 
-constexpr const char* kWhere = "vertex tet contacts";
+constexpr const char* kVertexTetWhere = "vertex tet contacts";
 
 // The checked test (the view of the arguments): boxes enlarged by 8 x the tolerance of their largest
 // side (contact_tests_impl.h) plus a rounding slack.
-VertexTetTest prepare(std::span<const double> positions, std::span<const uint32_t> tets,
+VertexTetTest prepare_vertex_tet(std::span<const double> positions, std::span<const uint32_t> tets,
                       std::span<const uint32_t> vertex_object, std::span<const uint32_t> tet_object,
                       double inside_tolerance, ContactPairs pairs, int threads, double* largest) {
-  if (threads < 0) throw InputError(kWhere, "threads", "must be >= 0, got " + std::to_string(threads));
+  if (threads < 0) throw InputError(kVertexTetWhere, "threads", "must be >= 0, got " + std::to_string(threads));
   if (!(inside_tolerance >= 0 && inside_tolerance <= 0.01))
-    throw InputError(kWhere, "inside_tolerance", "must be in [0, 0.01], got " + std::to_string(inside_tolerance));
-  *largest = collision_detail::check_positions(positions, kWhere, threads);
+    throw InputError(kVertexTetWhere, "inside_tolerance", "must be in [0, 0.01], got " + std::to_string(inside_tolerance));
+  *largest = collision_detail::check_positions(positions, kVertexTetWhere, threads);
   const int64_t vertices = static_cast<int64_t>(positions.size() / 3);
-  collision_detail::check_primitives(tets, 4, vertices, kWhere, "tets", threads);
-  collision_detail::check_objects(vertex_object, vertices, kWhere, "vertex_object");
-  collision_detail::check_objects(tet_object, static_cast<int64_t>(tets.size() / 4), kWhere, "tet_object");
+  collision_detail::check_primitives(tets, 4, vertices, kVertexTetWhere, "tets", threads);
+  collision_detail::check_objects(vertex_object, vertices, kVertexTetWhere, "vertex_object");
+  collision_detail::check_objects(tet_object, static_cast<int64_t>(tets.size() / 4), kVertexTetWhere, "tet_object");
   const double margin = collision_detail::box_slack(*largest, 0);
   return {{positions.data(), tets.data(), static_cast<int64_t>(tets.size() / 4), 4, margin, 8 * inside_tolerance},
           {vertex_object.data(), tet_object.data(), pairs == ContactPairs::all},
@@ -38,15 +38,15 @@ std::vector<VertexTetContact> vertex_tet_contacts(std::span<const double> positi
                                                   std::span<const uint32_t> vertex_object,
                                                   std::span<const uint32_t> tet_object, const ContactOptions& options,
                                                   double inside_tolerance) {
-  require_backend(options.backend, kWhere);
+  require_backend(options.backend, kVertexTetWhere);
   double largest = 0;
-  const VertexTetTest test = prepare(positions, tets, vertex_object, tet_object, inside_tolerance, options.pairs,
+  const VertexTetTest test = prepare_vertex_tet(positions, tets, vertex_object, tet_object, inside_tolerance, options.pairs,
                                      options.threads, &largest);
   const double cell = collision_detail::hash_cell_size(positions, tets, 4, options.cell_size, largest,
-                                                       test.tets.margin, kWhere, options.threads);
+                                                       test.tets.margin, kVertexTetWhere, options.threads);
   const int64_t vertices = static_cast<int64_t>(positions.size() / 3);
-  if (options.backend == Backend::cuda) return collision_detail::vertex_tet_contacts_cuda(test, vertices, cell, kWhere);
-  const SpatialHash hash = collision_detail::build_hash_cpu(test.tets, cell, kWhere, options.threads);
+  if (options.backend == Backend::cuda) return collision_detail::vertex_tet_contacts_cuda(test, vertices, cell, kVertexTetWhere);
+  const SpatialHash hash = collision_detail::build_hash_cpu(test.tets, cell, kVertexTetWhere, options.threads);
   return collision_detail::vertex_tet_contacts_cpu(hash.view(), test, vertices, options.threads);
 }
 
@@ -56,7 +56,7 @@ std::vector<VertexTetContact> vertex_tet_contacts_brute_force(std::span<const do
                                                               std::span<const uint32_t> tet_object, ContactPairs pairs,
                                                               double inside_tolerance) {
   double largest = 0;
-  const VertexTetTest test = prepare(positions, tets, vertex_object, tet_object, inside_tolerance, pairs, 0, &largest);
+  const VertexTetTest test = prepare_vertex_tet(positions, tets, vertex_object, tet_object, inside_tolerance, pairs, 0, &largest);
   std::vector<VertexTetContact> out;
   const uint32_t vertices = static_cast<uint32_t>(positions.size() / 3);
   const uint32_t count = static_cast<uint32_t>(tets.size() / 4);

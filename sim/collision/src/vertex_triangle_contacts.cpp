@@ -11,20 +11,20 @@
 namespace ctsurg::sim {
 namespace {
 
-constexpr const char* kWhere = "vertex triangle contacts";
+constexpr const char* kVertexTriangleWhere = "vertex triangle contacts";
 
 // The checked test (the view of the arguments) and the slack-enlarged margin.
-VertexTriangleTest prepare(std::span<const double> positions, std::span<const uint32_t> triangles,
+VertexTriangleTest prepare_vertex_triangle(std::span<const double> positions, std::span<const uint32_t> triangles,
                            std::span<const uint32_t> vertex_object, std::span<const uint32_t> triangle_object,
                            double distance, ContactPairs pairs, int threads, double* largest) {
-  if (threads < 0) throw InputError(kWhere, "threads", "must be >= 0, got " + std::to_string(threads));
+  if (threads < 0) throw InputError(kVertexTriangleWhere, "threads", "must be >= 0, got " + std::to_string(threads));
   if (!std::isfinite(distance) || distance < 0)
-    throw InputError(kWhere, "distance", "must be finite and >= 0 mm, got " + std::to_string(distance));
-  *largest = collision_detail::check_positions(positions, kWhere, threads);
+    throw InputError(kVertexTriangleWhere, "distance", "must be finite and >= 0 mm, got " + std::to_string(distance));
+  *largest = collision_detail::check_positions(positions, kVertexTriangleWhere, threads);
   const int64_t vertices = static_cast<int64_t>(positions.size() / 3);
-  collision_detail::check_primitives(triangles, 3, vertices, kWhere, "triangles", threads);
-  collision_detail::check_objects(vertex_object, vertices, kWhere, "vertex_object");
-  collision_detail::check_objects(triangle_object, static_cast<int64_t>(triangles.size() / 3), kWhere,
+  collision_detail::check_primitives(triangles, 3, vertices, kVertexTriangleWhere, "triangles", threads);
+  collision_detail::check_objects(vertex_object, vertices, kVertexTriangleWhere, "vertex_object");
+  collision_detail::check_objects(triangle_object, static_cast<int64_t>(triangles.size() / 3), kVertexTriangleWhere,
                                   "triangle_object");
   const double margin = distance + collision_detail::box_slack(*largest, distance);
   return {{positions.data(), triangles.data(), static_cast<int64_t>(triangles.size() / 3), 3, margin, 0},
@@ -39,16 +39,16 @@ std::vector<VertexTriangleContact> vertex_triangle_contacts(std::span<const doub
                                                             std::span<const uint32_t> vertex_object,
                                                             std::span<const uint32_t> triangle_object, double distance,
                                                             const ContactOptions& options) {
-  require_backend(options.backend, kWhere);
+  require_backend(options.backend, kVertexTriangleWhere);
   double largest = 0;
-  const VertexTriangleTest test = prepare(positions, triangles, vertex_object, triangle_object, distance,
+  const VertexTriangleTest test = prepare_vertex_triangle(positions, triangles, vertex_object, triangle_object, distance,
                                           options.pairs, options.threads, &largest);
   const double cell = collision_detail::hash_cell_size(positions, triangles, 3, options.cell_size, largest,
-                                                       test.triangles.margin, kWhere, options.threads);
+                                                       test.triangles.margin, kVertexTriangleWhere, options.threads);
   const int64_t vertices = static_cast<int64_t>(positions.size() / 3);
   if (options.backend == Backend::cuda)
-    return collision_detail::vertex_triangle_contacts_cuda(test, vertices, cell, kWhere);
-  const SpatialHash hash = collision_detail::build_hash_cpu(test.triangles, cell, kWhere, options.threads);
+    return collision_detail::vertex_triangle_contacts_cuda(test, vertices, cell, kVertexTriangleWhere);
+  const SpatialHash hash = collision_detail::build_hash_cpu(test.triangles, cell, kVertexTriangleWhere, options.threads);
   return collision_detail::vertex_triangle_contacts_cpu(hash.view(), test, vertices, options.threads);
 }
 
@@ -59,7 +59,7 @@ std::vector<VertexTriangleContact> vertex_triangle_contacts_brute_force(std::spa
                                                                         double distance, ContactPairs pairs) {
   double largest = 0;
   const VertexTriangleTest test =
-      prepare(positions, triangles, vertex_object, triangle_object, distance, pairs, 0, &largest);
+      prepare_vertex_triangle(positions, triangles, vertex_object, triangle_object, distance, pairs, 0, &largest);
   std::vector<VertexTriangleContact> out;
   const uint32_t vertices = static_cast<uint32_t>(positions.size() / 3);
   const uint32_t count = static_cast<uint32_t>(triangles.size() / 3);

@@ -16,7 +16,7 @@
 namespace ctsurg::sim {
 namespace {
 
-constexpr const char* kWhere = "fem contact";
+constexpr const char* kContactWhere = "fem contact";
 
 std::array<double, 3> face_normal(const std::vector<double>& x, const uint32_t* f) {  // not normalised: 2 x area
   const double* a = &x[3 * static_cast<size_t>(f[0])];
@@ -29,10 +29,10 @@ std::array<double, 3> face_normal(const std::vector<double>& x, const uint32_t* 
 }  // namespace
 
 FemContact::FemContact(const FemModel& model, const FemContactOptions& options) : options_(options) {
-  if (model.order != 1) throw InputError(kWhere, "elements", "contact runs on linear (4-node) tets");
-  if (options.iterations < 1 || options.iterations > 100) throw InputError(kWhere, "iterations", "must be 1 .. 100");
-  if (options.interval_steps < 1 || options.interval_steps > 1000) throw InputError(kWhere, "interval_steps", "must be 1 .. 1000");
-  if (!(std::isfinite(options.distance_mm) && options.distance_mm >= 0)) throw InputError(kWhere, "distance_mm", "must be finite and >= 0");
+  if (model.order != 1) throw InputError(kContactWhere, "elements", "contact runs on linear (4-node) tets");
+  if (options.iterations < 1 || options.iterations > 100) throw InputError(kContactWhere, "iterations", "must be 1 .. 100");
+  if (options.interval_steps < 1 || options.interval_steps > 1000) throw InputError(kContactWhere, "interval_steps", "must be 1 .. 1000");
+  if (!(std::isfinite(options.distance_mm) && options.distance_mm >= 0)) throw InputError(kContactWhere, "distance_mm", "must be finite and >= 0");
   const int32_t nn = model.node_count();
   std::vector<int32_t> body;
   bodies_ = fem_mesh_pieces(model.tets, nn, body);
@@ -231,7 +231,7 @@ double FemContact::deepest_penetration(const FemModel& model, const Real* u) con
 BodySeparation separate_bodies(TetMesh& mesh, bool by_label, const std::vector<HalfSpace>& planes, double gap_mm) {
   BodySeparation out;
   if (!by_label && planes.empty()) return out;
-  if (!(std::isfinite(gap_mm) && gap_mm >= 0)) throw InputError(kWhere, "gap_mm", "must be finite and >= 0");
+  if (!(std::isfinite(gap_mm) && gap_mm >= 0)) throw InputError(kContactWhere, "gap_mm", "must be finite and >= 0");
   if (gap_mm > 0 && !planes.empty()) {
     // A slab of gap_mm around each plane is taken out (the tets whose centroid is in it), so the bodies
     // start apart: a coincident, jagged seam between two bodies interlocks like a staircase.
@@ -253,18 +253,18 @@ BodySeparation separate_bodies(TetMesh& mesh, bool by_label, const std::vector<H
       kept.insert(kept.end(), mesh.tets.begin() + static_cast<std::ptrdiff_t>(4 * e), mesh.tets.begin() + static_cast<std::ptrdiff_t>(4 * e + 4));
       if (!mesh.tet_labels.empty()) labels.push_back(mesh.tet_labels[e]);
     }
-    if (kept.empty()) throw InputError(kWhere, "gap_mm", "the slab takes out every tet");
+    if (kept.empty()) throw InputError(kContactWhere, "gap_mm", "the slab takes out every tet");
     out.tets_removed = static_cast<int64_t>((mesh.tets.size() - kept.size()) / 4);
     mesh.tets.swap(kept);
     if (!mesh.tet_labels.empty()) mesh.tet_labels.swap(labels);
   }
   const int32_t nn = static_cast<int32_t>(mesh.node_count()), nt = static_cast<int32_t>(mesh.tet_count());
-  if (by_label && mesh.tet_labels.size() != static_cast<size_t>(nt)) throw InputError(kWhere, "labels", "expected one label per tet");
+  if (by_label && mesh.tet_labels.size() != static_cast<size_t>(nt)) throw InputError(kContactWhere, "labels", "expected one label per tet");
   for (const HalfSpace& h : planes) {
     const double n2 = h.normal[0] * h.normal[0] + h.normal[1] * h.normal[1] + h.normal[2] * h.normal[2];
-    if (!(n2 > 0) || !std::isfinite(n2)) throw InputError(kWhere, "planes", "a plane's normal must be finite and not zero");
+    if (!(n2 > 0) || !std::isfinite(n2)) throw InputError(kContactWhere, "planes", "a plane's normal must be finite and not zero");
   }
-  if (planes.size() > 16) throw InputError(kWhere, "planes", "at most 16 planes");
+  if (planes.size() > 16) throw InputError(kContactWhere, "planes", "at most 16 planes");
   // Each tet's region: its label and the sides of the planes its centroid is on.
   std::vector<uint64_t> region(static_cast<size_t>(nt), 0);
   for (int32_t e = 0; e < nt; ++e) {

@@ -8,8 +8,6 @@
 
 namespace ctsurg::sim {
 
-static_assert(kFemModelMaxMaterials <= kFemMaxMaterials, "a view carries every material of a model");
-
 // dm_inverse: #T x 9, volume: #T, both kept alive by the caller as long as the view; element_material:
 // the model's (#T, or null for one material), on the device for a device view.
 template <class T>
@@ -20,7 +18,6 @@ FemElementView<T> fem_element_view(const FemModel& model, const T* dm_inverse, c
   v.volume = volume;
   v.count = model.tet_count();
   v.order = model.order;
-  v.material_count = static_cast<int32_t>(model.materials.size());
   for (std::size_t k = 0; k < model.materials.size(); ++k) {
     const FemMaterial& m = model.materials[k];
     v.materials[k] = {m.law, static_cast<T>(model.lame[k].mu), static_cast<T>(model.lame[k].lambda),
@@ -28,6 +25,13 @@ FemElementView<T> fem_element_view(const FemModel& model, const T* dm_inverse, c
   }
   v.element_material = element_material;
   return v;
+}
+
+// Element e's law and constants, what a double view's material(e) gives, without building the view.
+inline FemLawParameters<double> fem_element_law(const FemModel& model, int32_t e) {
+  const std::size_t k = static_cast<std::size_t>(model.material_index(e));
+  const FemMaterial& m = model.materials[k];
+  return {m.law, model.lame[k].mu, model.lame[k].lambda, {m.constants[0], m.constants[1]}};
 }
 
 // A host view (element_material: the model's own).

@@ -15,7 +15,7 @@
 namespace ctsurg::sim {
 namespace {
 
-constexpr const char* kWhere = "fem dynamics";
+constexpr const char* kExplicitWhere = "fem dynamics";
 
 std::string rest_text(const double* p) {
   std::ostringstream s;
@@ -118,24 +118,24 @@ FemCriticalStep fem_critical_time_step(const FemModel& model, double safety_fact
 
 FemExplicitDynamics::FemExplicitDynamics(const FemModel& model, const FemDynamicsOptions& options, Backend backend)
     : model_(model), options_(options) {
-  if (!backend_available(backend)) require_backend(backend, kWhere);  // cuda without a CUDA build or device: says why
+  if (!backend_available(backend)) require_backend(backend, kExplicitWhere);  // cuda without a CUDA build or device: says why
   if (model.order != 1)
-    throw InputError(kWhere, "order", "the explicit dynamics runs linear tets only (quadratic ones: the static or implicit solver)");
+    throw InputError(kExplicitWhere, "order", "the explicit dynamics runs linear tets only (quadratic ones: the static or implicit solver)");
   const auto& o = options;
-  if (!(o.mass_damping >= 0 && std::isfinite(o.mass_damping))) throw InputError(kWhere, "mass_damping", "must be finite and >= 0 (1/s)");
+  if (!(o.mass_damping >= 0 && std::isfinite(o.mass_damping))) throw InputError(kExplicitWhere, "mass_damping", "must be finite and >= 0 (1/s)");
   for (double g : o.gravity)
-    if (!std::isfinite(g)) throw InputError(kWhere, "gravity", "must be finite");
-  if (o.energy_check_interval < 1) throw InputError(kWhere, "energy_check_interval", "must be >= 1");
-  if (!(o.energy_growth > 1)) throw InputError(kWhere, "energy_growth", "must be > 1");
-  if (!(o.energy_floor >= 0)) throw InputError(kWhere, "energy_floor", "must be >= 0");
-  if (o.threads < 0) throw InputError(kWhere, "threads", "must be >= 0");
+    if (!std::isfinite(g)) throw InputError(kExplicitWhere, "gravity", "must be finite");
+  if (o.energy_check_interval < 1) throw InputError(kExplicitWhere, "energy_check_interval", "must be >= 1");
+  if (!(o.energy_growth > 1)) throw InputError(kExplicitWhere, "energy_growth", "must be > 1");
+  if (!(o.energy_floor >= 0)) throw InputError(kExplicitWhere, "energy_floor", "must be >= 0");
+  if (o.threads < 0) throw InputError(kExplicitWhere, "threads", "must be >= 0");
   const FemCriticalStep cs = fem_critical_time_step(model, o.safety_factor);
   if (o.dt == 0) {
     dt_ = cs.dt;
   } else {
-    if (!(o.dt > 0 && std::isfinite(o.dt))) throw InputError(kWhere, "dt", "must be finite and > 0 s, or 0 (automatic)");
+    if (!(o.dt > 0 && std::isfinite(o.dt))) throw InputError(kExplicitWhere, "dt", "must be finite and > 0 s, or 0 (automatic)");
     if (o.dt > cs.critical)
-      throw InputError(kWhere, "dt", "step " + std::to_string(o.dt) + " s exceeds the critical step " +
+      throw InputError(kExplicitWhere, "dt", "step " + std::to_string(o.dt) + " s exceeds the critical step " +
                                          std::to_string(cs.critical) + " s of element " + std::to_string(cs.element) +
                                          "; use <= " + std::to_string(cs.dt) + " s");
     dt_ = o.dt;
@@ -147,7 +147,7 @@ FemExplicitDynamics::FemExplicitDynamics(const FemModel& model, const FemDynamic
   if (backend == Backend::cuda) {
     device_ = std::make_unique<FemDeviceDynamics>(
         model, dm_inverse_, volume_, step_constants(dt_, o.mass_damping, o.gravity), dt_,
-        FemDeviceGuard{o.energy_check_interval, o.energy_growth, o.energy_floor}, kWhere);
+        FemDeviceGuard{o.energy_check_interval, o.energy_growth, o.energy_floor}, kExplicitWhere);
   } else {
     u_.assign(n3, 0);
     u_prev_.assign(n3, 0);
@@ -155,7 +155,7 @@ FemExplicitDynamics::FemExplicitDynamics(const FemModel& model, const FemDynamic
     corner_forces_.assign(12 * static_cast<std::size_t>(model.tet_count()), 0);
   }
   if (o.contact.enabled) {
-    if (device_) throw InputError(kWhere, "contact", "contact between bodies runs on the cpu backend only; set backend: cpu");
+    if (device_) throw InputError(kExplicitWhere, "contact", "contact between bodies runs on the cpu backend only; set backend: cpu");
     FemContactOptions c = o.contact;
     if (c.threads == 0) c.threads = o.threads;
     contact_ = std::make_unique<FemContact>(model, c);
@@ -177,7 +177,7 @@ void FemExplicitDynamics::update_inverse_mass() {
 
 void FemExplicitDynamics::set_fixed_nodes(const std::vector<int32_t>& nodes) {
   for (int32_t i : nodes)
-    if (i < 0 || i >= model_.node_count()) throw InputError(kWhere, "fixed_nodes", "node id " + std::to_string(i) + " out of range");
+    if (i < 0 || i >= model_.node_count()) throw InputError(kExplicitWhere, "fixed_nodes", "node id " + std::to_string(i) + " out of range");
   fixed_.assign(model_.node_count(), 0);
   for (int32_t i : nodes) {
     fixed_[i] = 1;
@@ -190,11 +190,11 @@ void FemExplicitDynamics::set_fixed_nodes(const std::vector<int32_t>& nodes) {
 
 void FemExplicitDynamics::set_prescribed(const std::vector<int32_t>& nodes, const std::vector<double>& displacements) {
   if (displacements.size() != 3 * nodes.size())
-    throw InputError(kWhere, "prescribed_displacements", "expected #G x 3 = " + std::to_string(3 * nodes.size()) + " values");
+    throw InputError(kExplicitWhere, "prescribed_displacements", "expected #G x 3 = " + std::to_string(3 * nodes.size()) + " values");
   for (int32_t i : nodes)
-    if (i < 0 || i >= model_.node_count()) throw InputError(kWhere, "prescribed_nodes", "node id " + std::to_string(i) + " out of range");
+    if (i < 0 || i >= model_.node_count()) throw InputError(kExplicitWhere, "prescribed_nodes", "node id " + std::to_string(i) + " out of range");
   for (double d : displacements)
-    if (!std::isfinite(d)) throw InputError(kWhere, "prescribed_displacements", "must be finite");
+    if (!std::isfinite(d)) throw InputError(kExplicitWhere, "prescribed_displacements", "must be finite");
   const bool same_nodes = nodes == prescribed_nodes_;
   prescribed_nodes_ = nodes;
   prescribed_.assign(displacements.begin(), displacements.end());
@@ -211,31 +211,31 @@ void FemExplicitDynamics::clear_prescribed() {
 
 void FemExplicitDynamics::set_external_forces(const std::vector<double>& forces) {
   if (!forces.empty() && forces.size() != 3 * static_cast<std::size_t>(model_.node_count()))
-    throw InputError(kWhere, "forces", "expected #N x 3 values or none");
+    throw InputError(kExplicitWhere, "forces", "expected #N x 3 values or none");
   for (double f : forces)
-    if (!std::isfinite(f)) throw InputError(kWhere, "forces", "must be finite");
+    if (!std::isfinite(f)) throw InputError(kExplicitWhere, "forces", "must be finite");
   external_.assign(forces.begin(), forces.end());
   if (device_) device_->set_external_forces(external_);
 }
 
 void FemExplicitDynamics::set_contact_sphere(const std::array<double, 3>& centre, double radius) {
   for (double c : centre)
-    if (!std::isfinite(c)) throw InputError(kWhere, "sphere centre", "must be finite");
-  if (!(std::isfinite(radius) && radius >= 0)) throw InputError(kWhere, "sphere radius", "must be finite and >= 0 mm");
+    if (!std::isfinite(c)) throw InputError(kExplicitWhere, "sphere centre", "must be finite");
+  if (!(std::isfinite(radius) && radius >= 0)) throw InputError(kExplicitWhere, "sphere radius", "must be finite and >= 0 mm");
   sphere_ = {centre[0], centre[1], centre[2], radius};
   if (device_) device_->set_contact_sphere(FemSphereView{sphere_[0], sphere_[1], sphere_[2], sphere_[3]});
 }
 
 void FemExplicitDynamics::set_contact_instruments(const std::vector<InstrumentView>& instruments) {
   if (device_ && !instruments.empty()) {
-    throw InputError(kWhere, "instruments", "instrument contact runs on the cpu backend only; set backend: cpu");
+    throw InputError(kExplicitWhere, "instruments", "instrument contact runs on the cpu backend only; set backend: cpu");
   }
-  for (const InstrumentView& v : instruments) check_instrument_view(v, kWhere, "instruments");
+  for (const InstrumentView& v : instruments) check_instrument_view(v, kExplicitWhere, "instruments");
   instruments_ = instruments;
 }
 
 void FemExplicitDynamics::step(int steps) {
-  if (steps < 0) throw InputError(kWhere, "steps", "must be >= 0");
+  if (steps < 0) throw InputError(kExplicitWhere, "steps", "must be >= 0");
   if (device_) return step_on_device(steps);
   const FemElementView<Real> el = element_view(model_, dm_inverse_, volume_);
   const FemStepConstants k = step_constants(dt_, options_.mass_damping, options_.gravity);
@@ -285,15 +285,15 @@ void FemExplicitDynamics::step_on_device(int steps) {
 std::vector<Real> FemExplicitDynamics::raw_displacements() const { return device_ ? device_->displacements() : u_; }
 
 std::vector<Real> FemExplicitDynamics::raw_previous_displacements() const {
-  if (device_) throw InputError(kWhere, "backend", "the previous displacements are kept on the device");
+  if (device_) throw InputError(kExplicitWhere, "backend", "the previous displacements are kept on the device");
   return u_prev_;
 }
 
 void FemExplicitDynamics::restore_state(const std::vector<Real>& u, const std::vector<Real>& u_prev, double time, int64_t steps) {
-  if (device_) throw InputError(kWhere, "backend", "restoring a state runs on the cpu backend only");
-  if (u.size() != u_.size() || u_prev.size() != u_.size()) throw InputError(kWhere, "state", "expected #N x 3 displacements, twice");
+  if (device_) throw InputError(kExplicitWhere, "backend", "restoring a state runs on the cpu backend only");
+  if (u.size() != u_.size() || u_prev.size() != u_.size()) throw InputError(kExplicitWhere, "state", "expected #N x 3 displacements, twice");
   for (size_t i = 0; i < u.size(); ++i)
-    if (!std::isfinite(u[i]) || !std::isfinite(u_prev[i])) throw InputError(kWhere, "state", "a displacement is not finite");
+    if (!std::isfinite(u[i]) || !std::isfinite(u_prev[i])) throw InputError(kExplicitWhere, "state", "a displacement is not finite");
   u_ = u;
   u_prev_ = u_prev;
   time_ = time;

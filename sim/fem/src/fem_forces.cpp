@@ -77,7 +77,7 @@ std::array<double, 9> fem_deformation_gradient(const FemModel& model, int32_t e,
 std::array<double, 9> fem_element_stress(const FemModel& model, int32_t e, const std::vector<double>& displacements) {
   const auto F = fem_deformation_gradient(model, e, displacements);
   std::array<double, 9> P{};
-  fem_first_piola(fem_element_view(model).material(e), F.data(), P.data());
+  fem_first_piola(fem_element_law(model, e), F.data(), P.data());
   return P;
 }
 
@@ -87,7 +87,7 @@ std::array<double, 144> fem_element_stiffness(const FemModel& model, int32_t e, 
   double ue[12];
   element_displacements(model, e, displacements, ue);
   std::array<double, 144> K{};
-  fem_element_stiffness(fem_element_view(model).material(e), ue, &model.dm_inverse[9 * e], model.rest_volume[e], K.data());
+  fem_element_stiffness(fem_element_law(model, e), ue, &model.dm_inverse[9 * e], model.rest_volume[e], K.data());
   return K;
 }
 

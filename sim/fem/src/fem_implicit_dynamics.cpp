@@ -12,29 +12,29 @@
 namespace ctsurg::sim {
 namespace {
 
-constexpr const char* kWhere = "fem implicit";
+constexpr const char* kImplicitWhere = "fem implicit";
 using Clock = std::chrono::steady_clock;
 
 }  // namespace
 
 FemImplicitDynamics::FemImplicitDynamics(const FemModel& model, const FemImplicitOptions& options, Backend backend)
     : model_(model), options_(options) {
-  if (!backend_available(backend)) require_backend(backend, kWhere);
+  if (!backend_available(backend)) require_backend(backend, kImplicitWhere);
   const auto& o = options;
-  if (!(std::isfinite(o.dt) && o.dt > 0)) throw InputError(kWhere, "dt", "must be finite and > 0 s");
-  if (!(std::isfinite(o.mass_damping) && o.mass_damping >= 0)) throw InputError(kWhere, "mass_damping", "must be finite and >= 0 (1/s)");
+  if (!(std::isfinite(o.dt) && o.dt > 0)) throw InputError(kImplicitWhere, "dt", "must be finite and > 0 s");
+  if (!(std::isfinite(o.mass_damping) && o.mass_damping >= 0)) throw InputError(kImplicitWhere, "mass_damping", "must be finite and >= 0 (1/s)");
   if (!(std::isfinite(o.stiffness_damping) && o.stiffness_damping >= 0))
-    throw InputError(kWhere, "stiffness_damping", "must be finite and >= 0 (s)");
+    throw InputError(kImplicitWhere, "stiffness_damping", "must be finite and >= 0 (s)");
   for (double g : o.gravity)
-    if (!std::isfinite(g)) throw InputError(kWhere, "gravity", "must be finite");
-  if (o.max_halvings < 0 || o.max_halvings > 20) throw InputError(kWhere, "max_halvings", "must be in [0, 20]");
-  if (o.threads < 0) throw InputError(kWhere, "threads", "must be >= 0");
+    if (!std::isfinite(g)) throw InputError(kImplicitWhere, "gravity", "must be finite");
+  if (o.max_halvings < 0 || o.max_halvings > 20) throw InputError(kImplicitWhere, "max_halvings", "must be in [0, 20]");
+  if (o.threads < 0) throw InputError(kImplicitWhere, "threads", "must be >= 0");
   if (options_.newton.tolerance_mm == 0) options_.newton.tolerance_mm = 1e-4;
   options_.newton.threads = o.threads;
   options_.newton.initial_displacements.clear();
   validate_fem_static(model, {}, {}, options_.newton);
-  if (backend == Backend::cuda) device_cg_ = std::make_unique<DeviceConjugateGradient>(kWhere);
-  newton_ = std::make_unique<FemNewton>(model, options_.newton, device_cg_.get(), kWhere);
+  if (backend == Backend::cuda) device_cg_ = std::make_unique<DeviceConjugateGradient>(kImplicitWhere);
+  newton_ = std::make_unique<FemNewton>(model, options_.newton, device_cg_.get(), kImplicitWhere);
   const std::size_t n3 = 3 * static_cast<std::size_t>(model.node_count());
   fixed_.assign(3 * static_cast<std::size_t>(model.node_count()), 0);
   u_.assign(n3, 0.0);
@@ -47,11 +47,11 @@ FemImplicitDynamics::~FemImplicitDynamics() = default;
 void FemImplicitDynamics::set_supports(const std::vector<int32_t>& nodes, const std::vector<int32_t>& components) {
   fixed_.assign(fixed_.size(), 0);
   for (const int32_t n : nodes) {
-    if (n < 0 || n >= model_.node_count()) throw InputError(kWhere, "fixed_nodes", "node " + std::to_string(n) + " out of range");
+    if (n < 0 || n >= model_.node_count()) throw InputError(kImplicitWhere, "fixed_nodes", "node " + std::to_string(n) + " out of range");
     for (int a = 0; a < 3; ++a) fixed_[3 * static_cast<std::size_t>(n) + a] = 1;
   }
   for (const int32_t c : components) {
-    if (c < 0 || c >= 3 * model_.node_count()) throw InputError(kWhere, "fixed_components", "component " + std::to_string(c) + " out of range");
+    if (c < 0 || c >= 3 * model_.node_count()) throw InputError(kImplicitWhere, "fixed_components", "component " + std::to_string(c) + " out of range");
     fixed_[static_cast<std::size_t>(c)] = 1;
   }
   for (std::size_t d = 0; d < fixed_.size(); ++d)
@@ -59,11 +59,11 @@ void FemImplicitDynamics::set_supports(const std::vector<int32_t>& nodes, const 
 }
 
 void FemImplicitDynamics::set_prescribed(const std::vector<int32_t>& nodes, const std::vector<double>& displacements) {
-  if (displacements.size() != 3 * nodes.size()) throw InputError(kWhere, "prescribed_displacements", "expected #G x 3 values");
+  if (displacements.size() != 3 * nodes.size()) throw InputError(kImplicitWhere, "prescribed_displacements", "expected #G x 3 values");
   for (const int32_t n : nodes)
-    if (n < 0 || n >= model_.node_count()) throw InputError(kWhere, "prescribed_nodes", "node " + std::to_string(n) + " out of range");
+    if (n < 0 || n >= model_.node_count()) throw InputError(kImplicitWhere, "prescribed_nodes", "node " + std::to_string(n) + " out of range");
   for (const double d : displacements)
-    if (!std::isfinite(d)) throw InputError(kWhere, "prescribed_displacements", "must be finite");
+    if (!std::isfinite(d)) throw InputError(kImplicitWhere, "prescribed_displacements", "must be finite");
   prescribed_nodes_ = nodes;
   prescribed_ = displacements;
 }
@@ -75,9 +75,9 @@ void FemImplicitDynamics::clear_prescribed() {
 
 void FemImplicitDynamics::set_external_forces(const std::vector<double>& forces) {
   const std::size_t n3 = 3 * static_cast<std::size_t>(model_.node_count());
-  if (!forces.empty() && forces.size() != n3) throw InputError(kWhere, "forces", "expected #N x 3 values or none");
+  if (!forces.empty() && forces.size() != n3) throw InputError(kImplicitWhere, "forces", "expected #N x 3 values or none");
   for (const double f : forces)
-    if (!std::isfinite(f)) throw InputError(kWhere, "forces", "must be finite");
+    if (!std::isfinite(f)) throw InputError(kImplicitWhere, "forces", "must be finite");
   forces_ = forces;
   external_.assign(n3, 0.0);
   for (std::size_t d = 0; d < n3; ++d) external_[d] = (forces_.empty() ? 0.0 : forces_[d]) + model_.node_mass[d / 3] * options_.gravity[d % 3];
@@ -127,7 +127,7 @@ bool FemImplicitDynamics::advance(double h, const std::vector<double>& start, do
 }
 
 FemImplicitStepReport FemImplicitDynamics::step(int steps) {
-  if (steps < 0) throw InputError(kWhere, "steps", "must be >= 0");
+  if (steps < 0) throw InputError(kImplicitWhere, "steps", "must be >= 0");
   const auto t0 = Clock::now();
   FemImplicitStepReport report;
   for (int k = 0; k < steps; ++k) {
@@ -141,7 +141,7 @@ FemImplicitStepReport FemImplicitDynamics::step(int steps) {
       u_ = u0;
       v_ = v0;
       if (sub >= (1 << options_.max_halvings)) {
-        throw RuntimeError(std::string(kWhere) + ": the step at t = " + std::to_string(time_) + " s failed in " + std::to_string(sub) +
+        throw RuntimeError(std::string(kImplicitWhere) + ": the step at t = " + std::to_string(time_) + " s failed in " + std::to_string(sub) +
                            " sub-steps of " + std::to_string(options_.dt / sub) + " s (" + failure + ")");
       }
       sub *= 2;

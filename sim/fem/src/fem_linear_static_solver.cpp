@@ -7,6 +7,7 @@
 #include "sparse_cholesky.h"
 
 #include "ctsurg/core/error.h"
+#include "ctsurg/core/elapsed_seconds.h"
 
 #include <Eigen/Cholesky>
 #include <Eigen/OrderingMethods>
@@ -21,11 +22,9 @@
 namespace ctsurg::sim {
 namespace {
 
-constexpr const char* kWhere = "fem linear solver";
+constexpr const char* kLinearSolverWhere = "fem linear solver";
 using Clock = std::chrono::steady_clock;
 using SpMat = Eigen::SparseMatrix<double, Eigen::ColMajor, int>;
-
-double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
 }  // namespace
 
@@ -39,7 +38,7 @@ struct FemLinearStaticSolver::Impl {
   std::vector<int32_t> support_rows;        // components (3 node + axis) of supported used nodes
   SpMat k;                                  // s x s, both triangles
   Eigen::SparseMatrix<double, Eigen::RowMajor, int> k_support;  // support_rows x s (reactions)
-  SparseCholesky cholesky{kWhere};           // K_ss (CHOLMOD, sparse_cholesky.h)
+  SparseCholesky cholesky{kLinearSolverWhere};           // K_ss (CHOLMOD, sparse_cholesky.h)
   std::vector<std::array<int32_t, 3>> node_columns;  // #N: column slot per axis, -1 = none (yet)
   std::vector<uint8_t> has_columns;                  // #N
   std::vector<Eigen::VectorXd> columns;              // K_ss^-1 e_j per slot
@@ -57,26 +56,26 @@ struct FemLinearStaticSolver::Impl {
     const auto t0 = Clock::now();
     const int32_t n = m.node_count();
     if (m.order != 1)
-      throw InputError(kWhere, "order", "the condensed solver is for linear tets; quadratic ones solve with solve_fem_static");
+      throw InputError(kLinearSolverWhere, "order", "the condensed solver is for linear tets; quadratic ones solve with solve_fem_static");
     if (!m.every_law(FemLaw::linear))
-      throw InputError(kWhere, "material", "the factorised solver is for the linear material only (its K is constant); use solve_fem_static for St. Venant-Kirchhoff or Neo-Hookean");
+      throw InputError(kLinearSolverWhere, "material", "the factorised solver is for the linear material only (its K is constant); use solve_fem_static for St. Venant-Kirchhoff or Neo-Hookean");
     if (!supports.prescribed_nodes.empty() || !supports.prescribed_displacements.empty())
-      throw InputError(kWhere, "prescribed_nodes", "supports are fixed nodes and components only; pass grabs to solve()");
-    if (!(o.residual_tolerance > 0 && o.residual_tolerance < 1)) throw InputError(kWhere, "residual_tolerance", "must be in (0, 1)");
-    if (o.max_refinements < 0 || o.max_refinements > 10) throw InputError(kWhere, "max_refinements", "must be in [0, 10]");
-    if (o.max_force_nodes < 0) throw InputError(kWhere, "max_force_nodes", "must be >= 0");
-    if (o.max_grab_nodes < 0) throw InputError(kWhere, "max_grab_nodes", "must be >= 0");
-    if (o.threads < 0) throw InputError(kWhere, "threads", "must be >= 0");
+      throw InputError(kLinearSolverWhere, "prescribed_nodes", "supports are fixed nodes and components only; pass grabs to solve()");
+    if (!(o.residual_tolerance > 0 && o.residual_tolerance < 1)) throw InputError(kLinearSolverWhere, "residual_tolerance", "must be in (0, 1)");
+    if (o.max_refinements < 0 || o.max_refinements > 10) throw InputError(kLinearSolverWhere, "max_refinements", "must be in [0, 10]");
+    if (o.max_force_nodes < 0) throw InputError(kLinearSolverWhere, "max_force_nodes", "must be >= 0");
+    if (o.max_grab_nodes < 0) throw InputError(kLinearSolverWhere, "max_grab_nodes", "must be >= 0");
+    if (o.threads < 0) throw InputError(kLinearSolverWhere, "threads", "must be >= 0");
     supported.assign(3 * static_cast<std::size_t>(n), 0);
     for (int32_t i : supports.fixed_nodes) {
-      if (i < 0 || i >= n) throw InputError(kWhere, "fixed_nodes", "node id " + std::to_string(i) + " out of range [0, " + std::to_string(n) + ")");
+      if (i < 0 || i >= n) throw InputError(kLinearSolverWhere, "fixed_nodes", "node id " + std::to_string(i) + " out of range [0, " + std::to_string(n) + ")");
       supported[3 * i] = supported[3 * i + 1] = supported[3 * i + 2] = 1;
     }
     for (int32_t c : supports.fixed_components) {
-      if (c < 0 || c >= 3 * n) throw InputError(kWhere, "fixed_components", "component " + std::to_string(c) + " out of range [0, 3 #N)");
+      if (c < 0 || c >= 3 * n) throw InputError(kLinearSolverWhere, "fixed_components", "component " + std::to_string(c) + " out of range [0, 3 #N)");
       supported[c] = 1;
     }
-    check_rigid_modes(m, supported, fem_bounding_diagonal(m), kWhere);
+    check_rigid_modes(m, supported, fem_bounding_diagonal(m), kLinearSolverWhere);
     free_index.assign(supported.size(), -1);
     int32_t s = 0;
     for (int32_t i = 0; i < n; ++i) {
@@ -114,7 +113,7 @@ struct FemLinearStaticSolver::Impl {
     k.makeCompressed();
     cholesky.analyze(s, k.outerIndexPtr(), k.innerIndexPtr());
     if (cholesky.factorize(k.valuePtr()) >= 0)
-      throw InputError(kWhere, "boundary conditions",
+      throw InputError(kLinearSolverWhere, "boundary conditions",
                        "the stiffness matrix is not positive definite under these supports (a part of the mesh is not "
                        "connected to any fixed node?); fix nodes on every connected part");
     node_columns.assign(n, {-1, -1, -1});
@@ -171,10 +170,10 @@ struct FemLinearStaticSolver::Impl {
     SpMat kff(nf, nf);
     kff.setFromTriplets(t.begin(), t.end());
     kff.makeCompressed();
-    direct_factor = std::make_unique<SparseCholesky>(kWhere);
+    direct_factor = std::make_unique<SparseCholesky>(kLinearSolverWhere);
     direct_factor->analyze(nf, kff.outerIndexPtr(), kff.innerIndexPtr());
     if (direct_factor->factorize(kff.valuePtr()) >= 0)
-      throw InputError(kWhere, "prescribed_nodes", "the stiffness without the grabbed components is not positive definite");
+      throw InputError(kLinearSolverWhere, "prescribed_nodes", "the stiffness without the grabbed components is not positive definite");
     direct_cached = gnodes;
     stats.column_seconds += seconds_since(t0);
   }
@@ -195,25 +194,25 @@ struct FemLinearStaticSolver::Impl {
     const std::size_t n3 = 3 * static_cast<std::size_t>(n);
     // Checks first: nothing is computed for a bad call.
     if (gdisp.size() != 3 * gnodes.size())
-      throw InputError(kWhere, "prescribed_displacements", "expected #G x 3 = " + std::to_string(3 * gnodes.size()) + " values");
+      throw InputError(kLinearSolverWhere, "prescribed_displacements", "expected #G x 3 = " + std::to_string(3 * gnodes.size()) + " values");
     for (double d : gdisp)
-      if (!std::isfinite(d)) throw InputError(kWhere, "prescribed_displacements", "must be finite");
+      if (!std::isfinite(d)) throw InputError(kLinearSolverWhere, "prescribed_displacements", "must be finite");
     std::vector<uint8_t> grabbed(n, 0);
     for (int32_t i : gnodes) {
-      if (i < 0 || i >= n) throw InputError(kWhere, "prescribed_nodes", "node id " + std::to_string(i) + " out of range [0, " + std::to_string(n) + ")");
-      if (grabbed[i]) throw InputError(kWhere, "prescribed_nodes", "node " + std::to_string(i) + " is listed twice");
+      if (i < 0 || i >= n) throw InputError(kLinearSolverWhere, "prescribed_nodes", "node id " + std::to_string(i) + " out of range [0, " + std::to_string(n) + ")");
+      if (grabbed[i]) throw InputError(kLinearSolverWhere, "prescribed_nodes", "node " + std::to_string(i) + " is listed twice");
       const bool used = model.node_offsets[i + 1] > model.node_offsets[i];
       // A node held in some axes is grabbed in the others (its held components are not in p below).
       if (used && supported[3 * i] && supported[3 * i + 1] && supported[3 * i + 2])
-        throw InputError(kWhere, "prescribed_nodes", "node " + std::to_string(i) + " is held by a support in every axis; a grab cannot move it");
+        throw InputError(kLinearSolverWhere, "prescribed_nodes", "node " + std::to_string(i) + " is held by a support in every axis; a grab cannot move it");
       grabbed[i] = 1;
     }
     if (!loads.forces.empty() && loads.forces.size() != n3)
-      throw InputError(kWhere, "forces", "expected #N x 3 = " + std::to_string(n3) + " values or none");
+      throw InputError(kLinearSolverWhere, "forces", "expected #N x 3 = " + std::to_string(n3) + " values or none");
     for (double f : loads.forces)
-      if (!std::isfinite(f)) throw InputError(kWhere, "forces", "must be finite");
+      if (!std::isfinite(f)) throw InputError(kLinearSolverWhere, "forces", "must be finite");
     for (double g : loads.gravity)
-      if (!std::isfinite(g)) throw InputError(kWhere, "gravity", "must be finite");
+      if (!std::isfinite(g)) throw InputError(kLinearSolverWhere, "gravity", "must be finite");
 
     const Eigen::Index s = k.rows();
     // External forces on every component (reactions need the supported ones too) and on s.
@@ -307,7 +306,7 @@ struct FemLinearStaticSolver::Impl {
       grab_factor.compute(0.5 * (c + c.transpose()));  // K^-1 is symmetric; C_pp is a principal block
       grab_cached = gnodes;
       if (grab_factor.info() != Eigen::Success)
-        throw InputError(kWhere, "prescribed_nodes", "the grabbed nodes' compliance matrix is singular (repeated or coincident nodes?)");
+        throw InputError(kLinearSolverWhere, "prescribed_nodes", "the grabbed nodes' compliance matrix is singular (repeated or coincident nodes?)");
     }
     if (!direct) constrain(u, p, slots, target);
 

@@ -1,6 +1,7 @@
 #include "ctsurg/sim/fem/fem_local_region.h"
 
 #include "ctsurg/core/error.h"
+#include "ctsurg/core/elapsed_seconds.h"
 #include "ctsurg/sim/fem/fem_forces.h"
 #include "mesh_graph.h"
 
@@ -15,11 +16,7 @@
 namespace ctsurg::sim {
 namespace {
 
-constexpr const char* kWhere = "fem local region";
-
-double seconds_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
+constexpr const char* kLocalRegionWhere = "fem local region";
 
 // The mesh's edges as a CSR adjacency over the corner nodes (each row increasing, no repeats).
 void edge_adjacency(const FemModel& model, std::vector<int32_t>& offsets, std::vector<int32_t>& list) {
@@ -56,7 +53,7 @@ void geodesic(const FemModel& model, const std::vector<int32_t>& offsets, const 
   std::priority_queue<Item, std::vector<Item>, std::greater<Item>> queue;
   for (size_t k = 0; k < seeds.size(); ++k) {
     const int32_t s = seeds[k];
-    if (s < 0 || s >= n) throw InputError(kWhere, "seeds", "node " + std::to_string(s) + " out of range (0.." + std::to_string(n - 1) + ")");
+    if (s < 0 || s >= n) throw InputError(kLocalRegionWhere, "seeds", "node " + std::to_string(s) + " out of range (0.." + std::to_string(n - 1) + ")");
     const double d0 = start ? (*start)[k] : 0.0;
     if (d0 <= limit_mm && dist[static_cast<size_t>(s)] > d0) {
       dist[static_cast<size_t>(s)] = d0;
@@ -144,13 +141,13 @@ struct FemLocalRegionSolver::Impl {
   Impl(const FemModel& m, const FemBoundaryConditions& supports, const FemLocalRegionOptions& o, Backend b)
       : model(m), options(o), backend(b), linear_model(fem_linearised(m)) {
     if (!(options.radius_mm > 0) || !std::isfinite(options.radius_mm))
-      throw InputError(kWhere, "radius_mm", "must be a positive number of mm (got " + std::to_string(options.radius_mm) + ")");
+      throw InputError(kLocalRegionWhere, "radius_mm", "must be a positive number of mm (got " + std::to_string(options.radius_mm) + ")");
     if (options.balance_iterations < 0 || options.balance_iterations > 1000)
-      throw InputError(kWhere, "balance_iterations", "must be in 0..1000 (got " + std::to_string(options.balance_iterations) + ")");
+      throw InputError(kLocalRegionWhere, "balance_iterations", "must be in 0..1000 (got " + std::to_string(options.balance_iterations) + ")");
     if (!(options.balance_tolerance_mm > 0) || !std::isfinite(options.balance_tolerance_mm))
-      throw InputError(kWhere, "balance_tolerance_mm", "must be a positive number of mm");
-    if (model.order != 1) throw InputError(kWhere, "order", "the local region runs on linear (4-node) tets only");
-    if (!supports.prescribed_nodes.empty()) throw InputError(kWhere, "prescribed_nodes", "supports hold nodes at zero; grabs come with each solve");
+      throw InputError(kLocalRegionWhere, "balance_tolerance_mm", "must be a positive number of mm");
+    if (model.order != 1) throw InputError(kLocalRegionWhere, "order", "the local region runs on linear (4-node) tets only");
+    if (!supports.prescribed_nodes.empty()) throw InputError(kLocalRegionWhere, "prescribed_nodes", "supports hold nodes at zero; grabs come with each solve");
     global = std::make_unique<FemLinearStaticSolver>(linear_model, supports, options.linear);
     const size_t n = static_cast<size_t>(model.node_count());
     whole.assign(n, 0);
@@ -174,10 +171,10 @@ struct FemLocalRegionSolver::Impl {
     std::vector<double> start;
     if (seed_radii) {
       if (seed_radii->size() != seeds.size()) {
-        throw InputError(kWhere, "seed_radii", std::to_string(seed_radii->size()) + " radii for " + std::to_string(seeds.size()) + " seeds");
+        throw InputError(kLocalRegionWhere, "seed_radii", std::to_string(seed_radii->size()) + " radii for " + std::to_string(seeds.size()) + " seeds");
       }
       for (const double r : *seed_radii) {
-        if (!(r > 0) || !std::isfinite(r)) throw InputError(kWhere, "seed_radii", "must be positive numbers of mm (got " + std::to_string(r) + ")");
+        if (!(r > 0) || !std::isfinite(r)) throw InputError(kLocalRegionWhere, "seed_radii", "must be positive numbers of mm (got " + std::to_string(r) + ")");
         limit = std::max(limit, r);
       }
       start.resize(seeds.size());
@@ -319,7 +316,7 @@ FemStaticResult FemLocalRegionSolver::solve(const std::vector<int32_t>& prescrib
   const auto t0 = std::chrono::steady_clock::now();
   const size_t n = static_cast<size_t>(s.model.node_count());
   if (initial && initial->size() != 3 * n) {
-    throw InputError(kWhere, "initial_displacements", "expected #N x 3 = " + std::to_string(3 * n) + " values, got " + std::to_string(initial->size()));
+    throw InputError(kLocalRegionWhere, "initial_displacements", "expected #N x 3 = " + std::to_string(3 * n) + " values, got " + std::to_string(initial->size()));
   }
   // 1. The global linear solve (it checks the arguments).
   FemStaticResult result = s.global->solve(prescribed_nodes, prescribed_displacements, loads);

@@ -16,7 +16,7 @@
 namespace ctsurg::sim {
 namespace {
 
-constexpr const char* kWhere = "fem model";
+constexpr const char* kModelWhere = "fem model";
 
 std::string tet_text(const std::vector<double>& nodes, const int32_t* t) {
   std::ostringstream s;
@@ -34,22 +34,22 @@ FemModel build_fem_model(const std::vector<double>& nodes, const std::vector<int
 
 FemModel build_fem_model(const std::vector<double>& nodes, const std::vector<int32_t>& tets, const std::vector<FemMaterial>& materials,
                          const std::vector<int32_t>& element_material) {
-  if (materials.empty() || materials.size() > static_cast<std::size_t>(kFemModelMaxMaterials))
-    throw InputError(kWhere, "materials", "a model has 1 to " + std::to_string(kFemModelMaxMaterials) + " materials, got " + std::to_string(materials.size()));
+  if (materials.empty() || materials.size() > static_cast<std::size_t>(kFemMaxMaterials))
+    throw InputError(kModelWhere, "materials", "a model has 1 to " + std::to_string(kFemMaxMaterials) + " materials, got " + std::to_string(materials.size()));
   for (std::size_t k = 0; k < materials.size(); ++k) {
-    const std::string where = materials.size() == 1 ? std::string(kWhere) : std::string(kWhere) + " material " + std::to_string(k);
+    const std::string where = materials.size() == 1 ? std::string(kModelWhere) : std::string(kModelWhere) + " material " + std::to_string(k);
     validate_fem_material(materials[k], where.c_str());
   }
-  if (nodes.size() % 3 != 0) throw InputError(kWhere, "nodes", "expected #N x 3 coordinates, got " + std::to_string(nodes.size()) + " values");
-  if (tets.size() % 4 != 0) throw InputError(kWhere, "tets", "expected #T x 4 node ids, got " + std::to_string(tets.size()) + " values");
-  if (tets.empty()) throw InputError(kWhere, "tets", "the mesh has no tetrahedra");
+  if (nodes.size() % 3 != 0) throw InputError(kModelWhere, "nodes", "expected #N x 3 coordinates, got " + std::to_string(nodes.size()) + " values");
+  if (tets.size() % 4 != 0) throw InputError(kModelWhere, "tets", "expected #T x 4 node ids, got " + std::to_string(tets.size()) + " values");
+  if (tets.empty()) throw InputError(kModelWhere, "tets", "the mesh has no tetrahedra");
   // The kernels index corner forces as 12 e + 3 a in int32 (fem_forces_impl.h): at most INT32_MAX / 12
   // tets (178 million).
   if (nodes.size() / 3 > static_cast<std::size_t>(INT32_MAX / 4) || tets.size() / 4 > static_cast<std::size_t>(INT32_MAX / 12))
-    throw InputError(kWhere, "tets", "mesh too large: at most " + std::to_string(INT32_MAX / 12) + " tets and " +
+    throw InputError(kModelWhere, "tets", "mesh too large: at most " + std::to_string(INT32_MAX / 12) + " tets and " +
                                          std::to_string(INT32_MAX / 4) + " nodes (32-bit corner indices)");
   for (std::size_t i = 0; i < nodes.size(); ++i)
-    if (!std::isfinite(nodes[i])) throw InputError(kWhere, "nodes", "node " + std::to_string(i / 3) + " is not finite");
+    if (!std::isfinite(nodes[i])) throw InputError(kModelWhere, "nodes", "node " + std::to_string(i / 3) + " is not finite");
 
   FemModel m;
   m.materials = materials;
@@ -59,10 +59,10 @@ FemModel build_fem_model(const std::vector<double>& nodes, const std::vector<int
   const int32_t n = m.node_count(), t_count = m.tet_count();
   if (!element_material.empty()) {
     if (element_material.size() != static_cast<std::size_t>(t_count))
-      throw InputError(kWhere, "materials", "expected one material id per tet (" + std::to_string(t_count) + "), got " + std::to_string(element_material.size()));
+      throw InputError(kModelWhere, "materials", "expected one material id per tet (" + std::to_string(t_count) + "), got " + std::to_string(element_material.size()));
     for (int32_t e = 0; e < t_count; ++e)
       if (element_material[static_cast<std::size_t>(e)] < 0 || element_material[static_cast<std::size_t>(e)] >= static_cast<int32_t>(materials.size()))
-        throw InputError(kWhere, "materials", "tet " + std::to_string(e) + " has material id " + std::to_string(element_material[static_cast<std::size_t>(e)]) +
+        throw InputError(kModelWhere, "materials", "tet " + std::to_string(e) + " has material id " + std::to_string(element_material[static_cast<std::size_t>(e)]) +
                                                   ", not one of the " + std::to_string(materials.size()) + " materials");
     m.element_material = element_material;
   }
@@ -70,7 +70,7 @@ FemModel build_fem_model(const std::vector<double>& nodes, const std::vector<int
     for (int a = 0; a < 4; ++a) {
       const int32_t v = tets[4 * e + a];
       if (v < 0 || v >= n)
-        throw InputError(kWhere, "tets", "tet " + std::to_string(e) + " corner " + std::to_string(a) + ": node id " +
+        throw InputError(kModelWhere, "tets", "tet " + std::to_string(e) + " corner " + std::to_string(a) + ": node id " +
                                              std::to_string(v) + " out of range [0, " + std::to_string(n) + ")");
     }
 
@@ -91,10 +91,10 @@ FemModel build_fem_model(const std::vector<double>& nodes, const std::vector<int
     const double det = det3(dm);
     const double volume = det / 6;
     if (!(volume > 0))
-      throw InputError(kWhere, "tets", "tet " + std::to_string(e) + " is inverted or flat (signed volume " +
+      throw InputError(kModelWhere, "tets", "tet " + std::to_string(e) + " is inverted or flat (signed volume " +
                                            std::to_string(volume) + " mm^3, must be > 0; " + tet_text(nodes, t) + ")");
     if (volume < 1e-9 * longest * longest * longest)
-      throw InputError(kWhere, "tets", "tet " + std::to_string(e) + " is degenerate (volume " + std::to_string(volume) +
+      throw InputError(kModelWhere, "tets", "tet " + std::to_string(e) + " is degenerate (volume " + std::to_string(volume) +
                                            " mm^3 for a longest edge of " + std::to_string(longest) + " mm; " +
                                            tet_text(nodes, t) + ")");
     double c[9];
@@ -137,7 +137,7 @@ FemModel build_quadratic_fem_model(const std::vector<double>& nodes, const std::
   FemModel m = build_fem_model(nodes, tets, materials, element_material);  // checks, volumes, B of the corners
   const int32_t n1 = m.node_count(), t_count = m.tet_count();
   // Slot forces are indexed 30 e + 3 a in int32 (fem_forces_impl.h).
-  if (t_count > INT32_MAX / 30) throw InputError(kWhere, "tets", "mesh too large for quadratic tets: at most " + std::to_string(INT32_MAX / 30) + " tets");
+  if (t_count > INT32_MAX / 30) throw InputError(kModelWhere, "tets", "mesh too large for quadratic tets: at most " + std::to_string(INT32_MAX / 30) + " tets");
   // Edge nodes, numbered as first met; each vertex's edges to higher vertices in a small sorted list.
   std::vector<std::vector<std::pair<int32_t, int32_t>>> edges_of(static_cast<std::size_t>(n1));
   std::vector<int32_t> tets10(10 * static_cast<std::size_t>(t_count));
@@ -152,7 +152,7 @@ FemModel build_quadratic_fem_model(const std::vector<double>& nodes, const std::
       auto& list = edges_of[static_cast<std::size_t>(lo)];
       auto it = std::lower_bound(list.begin(), list.end(), std::make_pair(hi, INT32_MIN));
       if (it == list.end() || it->first != hi) {
-        if (next == INT32_MAX / 4) throw InputError(kWhere, "tets", "mesh too large for quadratic tets (32-bit node ids)");
+        if (next == INT32_MAX / 4) throw InputError(kModelWhere, "tets", "mesh too large for quadratic tets (32-bit node ids)");
         it = list.insert(it, {hi, next++});
       }
       tets10[10 * static_cast<std::size_t>(e) + 4 + k] = it->second;

@@ -2,6 +2,7 @@
 
 #include "ctsurg/core/error.h"
 #include "ctsurg/core/memory_guard.h"
+#include "ctsurg/core/elapsed_seconds.h"
 #include "ctsurg/sim/base/parallel.h"
 #include "device_conjugate_gradient.h"
 #include "fem_cpu_kernels.h"
@@ -23,8 +24,6 @@ namespace {
 
 constexpr double kForcingMax = 1e-2;  // the inexact Newton forcing term's cap (see newton)
 using Clock = std::chrono::steady_clock;
-
-double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
 // Eigen's sparse products (CG, the reused factor's CG) run one OpenMP team per product: below ~1e6
 // non-zeros a team costs more than it saves, and far more when the cores are shared (measured: 10x

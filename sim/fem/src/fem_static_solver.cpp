@@ -1,6 +1,7 @@
 #include "ctsurg/sim/fem/fem_static_solver.h"
 
 #include "ctsurg/core/error.h"
+#include "ctsurg/core/elapsed_seconds.h"
 #include "device_conjugate_gradient.h"
 #include "fem_newton.h"
 
@@ -14,25 +15,23 @@
 namespace ctsurg::sim {
 namespace {
 
-constexpr const char* kWhere = "fem static";
+constexpr const char* kStaticWhere = "fem static";
 using Clock = std::chrono::steady_clock;
-
-double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
 }  // namespace
 
 FemStaticSolver::FemStaticSolver(const FemModel& model, const FemStaticOptions& options, Backend backend)
     : model_(model), options_(options) {
-  if (!backend_available(backend)) require_backend(backend, kWhere);  // cuda without a CUDA build or device: says why
+  if (!backend_available(backend)) require_backend(backend, kStaticWhere);  // cuda without a CUDA build or device: says why
   validate_fem_static(model, {}, {}, options);
   if (backend == Backend::cuda) {
     if (options.preconditioner != FemPreconditioner::diagonal)
-      throw InputError(kWhere, "preconditioner",
+      throw InputError(kStaticWhere, "preconditioner",
                        "the cuda backend's conjugate gradient is diagonal (Jacobi) preconditioned; use diagonal, or "
                        "incomplete_cholesky on the cpu backend");
-    device_cg_ = std::make_unique<DeviceConjugateGradient>(kWhere);
+    device_cg_ = std::make_unique<DeviceConjugateGradient>(kStaticWhere);
   }
-  newton_ = std::make_unique<FemNewton>(model, options, device_cg_.get(), kWhere);
+  newton_ = std::make_unique<FemNewton>(model, options, device_cg_.get(), kStaticWhere);
 }
 
 FemStaticSolver::~FemStaticSolver() = default;

@@ -2,6 +2,7 @@
 
 #include "ctsurg/core/error.h"
 #include "ctsurg/core/memory_guard.h"
+#include "ctsurg/core/elapsed_seconds.h"
 
 #include <cholmod.h>
 #include <dlfcn.h>
@@ -14,7 +15,6 @@ namespace ctsurg::sim {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
 // The BLAS's own thread count, when it has one (OpenBLAS: openblas_set_num_threads, looked up at run
 // time so that any BLAS links), set to one: (1) the results must not depend on the machine's core count

@@ -19,7 +19,7 @@ namespace ctsurg::sim {
 
 namespace {
 
-constexpr const char* kWhere = "live session";
+constexpr const char* kSessionWhere = "live session";
 
 bool finite3(const std::array<double, 3>& v) { return std::isfinite(v[0]) && std::isfinite(v[1]) && std::isfinite(v[2]); }
 
@@ -49,7 +49,7 @@ void LiveSession::build(const std::vector<ToolAction>& user_tools, int64_t repla
   while (static_cast<int64_t>(loop_->recorder().frames()) < replay_frames) {
     const ScenarioLoop::Event event = loop_->advance();
     if (!event.unstable.stable) {
-      throw RuntimeError(std::string(kWhere) + ": replaying the recording became unstable: " +
+      throw RuntimeError(std::string(kSessionWhere) + ": replaying the recording became unstable: " +
                          loop_->unstable_message(event.unstable));
     }
   }
@@ -60,16 +60,16 @@ void LiveSession::build(const std::vector<ToolAction>& user_tools, int64_t repla
 
 int LiveSession::begin_tool(const LiveToolSpec& spec) {
   if (spec.kind != ToolKind::grab && spec.kind != ToolKind::probe && spec.kind != ToolKind::cut) {
-    throw InputError(kWhere, "tool", std::string(to_string(spec.kind)) + " is not a live tool (grab, probe, cut)");
+    throw InputError(kSessionWhere, "tool", std::string(to_string(spec.kind)) + " is not a live tool (grab, probe, cut)");
   }
-  if (!finite3(spec.position_mm)) throw InputError(kWhere, "position_mm", "must be three finite numbers");
+  if (!finite3(spec.position_mm)) throw InputError(kSessionWhere, "position_mm", "must be three finite numbers");
   if (spec.kind == ToolKind::cut) {
     const double l = length(spec.blade_edge_mm);
     if (!finite3(spec.blade_edge_mm) || !(l > 0) || l > kMaxLiveBladeMm) {
-      throw InputError(kWhere, "blade_edge_mm", "the blade's length must be in (0, " + exact_number(kMaxLiveBladeMm) + "] mm");
+      throw InputError(kSessionWhere, "blade_edge_mm", "the blade's length must be in (0, " + exact_number(kMaxLiveBladeMm) + "] mm");
     }
   } else if (!(spec.radius_mm > 0) || !(spec.radius_mm <= kMaxLiveToolRadiusMm)) {
-    throw InputError(kWhere, "radius_mm", "must be in (0, " + exact_number(kMaxLiveToolRadiusMm) + "] mm");
+    throw InputError(kSessionWhere, "radius_mm", "must be in (0, " + exact_number(kMaxLiveToolRadiusMm) + "] mm");
   }
   const int id = static_cast<int>(ended_.size());
   ended_.push_back(false);
@@ -78,15 +78,15 @@ int LiveSession::begin_tool(const LiveToolSpec& spec) {
 }
 
 void LiveSession::move_tool(int id, const std::array<double, 3>& position_mm) {
-  if (!tool_active(id)) throw InputError(kWhere, "id", std::to_string(id) + " is not a tool in use (begun and not ended)");
-  if (!finite3(position_mm)) throw InputError(kWhere, "position_mm", "must be three finite numbers");
+  if (!tool_active(id)) throw InputError(kSessionWhere, "id", std::to_string(id) + " is not a tool in use (begun and not ended)");
+  if (!finite3(position_mm)) throw InputError(kSessionWhere, "position_mm", "must be three finite numbers");
   LiveToolSpec spec;
   spec.position_mm = position_mm;
   pending_.push_back({Pending::Kind::move, id, spec});
 }
 
 void LiveSession::end_tool(int id) {
-  if (!tool_active(id)) throw InputError(kWhere, "id", std::to_string(id) + " is not a tool in use (begun and not ended)");
+  if (!tool_active(id)) throw InputError(kSessionWhere, "id", std::to_string(id) + " is not a tool in use (begun and not ended)");
   ended_[static_cast<size_t>(id)] = true;
   pending_.push_back({Pending::Kind::end, id, {}});
 }
@@ -136,7 +136,7 @@ void LiveSession::apply_pending() {
         k.t = t1;
         k.point = {PointSpec::Kind::position_mm, p.spec.position_mm};
         tool.path.push_back(k);
-        begun.push_back(timeline.add_tool(tool, origin, kWhere));
+        begun.push_back(timeline.add_tool(tool, origin, kSessionWhere));
         break;
       }
       case Pending::Kind::move: {
@@ -193,7 +193,7 @@ void LiveSession::go_back(const std::string& why) {
   pending_.clear();
   paused_ = true;
   stopped_message_ = why;
-  if (note_) note_(std::string(kWhere) + ": back to t = " + std::to_string(t_frame) + " s: " + why);
+  if (note_) note_(std::string(kSessionWhere) + ": back to t = " + std::to_string(t_frame) + " s: " + why);
 }
 
 LiveAdvance LiveSession::advance_events(int64_t n) {
@@ -302,12 +302,12 @@ std::vector<ToolAction> LiveSession::recorded_tools() const {
 // frame's index), and every tool kept starts before it.
 double LiveSession::save_duration() const {
   const int64_t last = frames() - 1;
-  if (last < 1) throw InputError(kWhere, "frames", "nothing recorded after the rest frame yet: run the session longer");
+  if (last < 1) throw InputError(kSessionWhere, "frames", "nothing recorded after the rest frame yet: run the session longer");
   const double fi = scenario_.frame_interval_s;
   double latest_start = 0;
   for (const ToolAction& tool : scenario_.tools) {
     if (tool.start_s > last_frame_time_) {
-      throw InputError(kWhere, tool.label + ".start_s", "starts after the last recorded frame (t = " +
+      throw InputError(kSessionWhere, tool.label + ".start_s", "starts after the last recorded frame (t = " +
                                                             exact_number(last_frame_time_) + " s): run the session longer");
     }
     latest_start = std::max(latest_start, tool.start_s);
@@ -316,7 +316,7 @@ double LiveSession::save_duration() const {
   double duration = static_cast<double>(last) * fi;
   if (latest_start >= duration) duration = last_frame_time_ + 0.25 * dt();
   if (static_cast<int64_t>(std::floor(duration / fi + 1e-9)) != last) {
-    throw RuntimeError(std::string(kWhere) + ": no duration gives " + std::to_string(last + 1) + " frames (the step " +
+    throw RuntimeError(std::string(kSessionWhere) + ": no duration gives " + std::to_string(last + 1) + " frames (the step " +
                        exact_number(dt()) + " s is too close to the frame interval)");
   }
   return duration;
@@ -353,7 +353,7 @@ Trajectory LiveSession::trajectory() const {
 void LiveSession::save(const std::filesystem::path& scenario_file, const std::filesystem::path& trajectory_file) const {
   const std::string text = scenario_text(std::filesystem::absolute(trajectory_file));
   const Trajectory traj = trajectory();
-  Provenance provenance{"ctsurg-live", kVersion, {kWhere}, {}, nlohmann::json::array()};
+  Provenance provenance{"ctsurg-live", kVersion, {kSessionWhere}, {}, nlohmann::json::array()};
   const ModelInputs read = model_inputs(scenario_);
   if (read.grid) provenance.add_input(scenario_.grid);
   if (read.surface) provenance.add_input(scenario_.surface);

@@ -134,8 +134,8 @@ void parse_material_section(const YamlField& mat, Scenario& s) {
       if (!by_label.emplace(lm.label, lm).second) entry.fail("label " + std::to_string(id) + " is given twice");
     }
     if (by_label.empty()) labels.fail("names no label");
-    if (by_label.size() > static_cast<size_t>(kFemModelMaxMaterials)) {
-      labels.fail("at most " + std::to_string(kFemModelMaxMaterials) + " labels with materials, got " + std::to_string(by_label.size()));
+    if (by_label.size() > static_cast<size_t>(kFemMaxMaterials)) {
+      labels.fail("at most " + std::to_string(kFemMaxMaterials) + " labels with materials, got " + std::to_string(by_label.size()));
     }
     for (auto& [label, lm] : by_label) s.label_materials.push_back(lm);
     // The first label's material stands for the model where one material is reported.
@@ -163,8 +163,8 @@ void parse_material_section(const YamlField& mat, Scenario& s) {
       parse_material_fields(item, s.model, section_law, inc.material, inc.law, inc.constants);
       s.inclusions.push_back(inc);
     }
-    if (s.label_materials.size() + s.inclusions.size() + (s.label_materials.empty() ? 1 : 0) > static_cast<size_t>(kFemModelMaxMaterials)) {
-      list.fail("at most " + std::to_string(kFemModelMaxMaterials) + " materials in a model (labels, inclusions and the tissue's)");
+    if (s.label_materials.size() + s.inclusions.size() + (s.label_materials.empty() ? 1 : 0) > static_cast<size_t>(kFemMaxMaterials)) {
+      list.fail("at most " + std::to_string(kFemMaxMaterials) + " materials in a model (labels, inclusions and the tissue's)");
     }
   }
   if (mat.has("damping_per_s")) s.damping_per_s = mat.child("damping_per_s").non_negative();

@@ -40,7 +40,6 @@ struct VesselDynamics::Solver {
 
 namespace {
 
-V3 at(const std::vector<double>& a, size_t i) { return {a[3 * i], a[3 * i + 1], a[3 * i + 2]}; }
 void put(std::vector<double>& a, size_t i, const V3& v) { a[3 * i] = v.x(), a[3 * i + 1] = v.y(), a[3 * i + 2] = v.z(); }
 
 }  // namespace

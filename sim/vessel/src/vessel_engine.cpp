@@ -11,7 +11,6 @@
 namespace ctsurg::sim {
 namespace {
 
-V3 at(const std::vector<double>& a, size_t i) { return {a[3 * i], a[3 * i + 1], a[3 * i + 2]}; }
 V3 eig(const Vec3& v) { return {v[0], v[1], v[2]}; }
 
 std::string lps_text(const Vec3& local, const Vec3& origin) {

@@ -8,12 +8,17 @@
 #include <Eigen/Geometry>
 
 #include <cmath>
+#include <cstddef>
+#include <vector>
 
 namespace ctsurg::sim {
 
 using V3 = Eigen::Vector3d;
 using M3 = Eigen::Matrix3d;
 using Q = Eigen::Quaterniond;
+
+// Item i of a flat array of 3-vectors (x0 y0 z0 x1 ...).
+inline V3 at(const std::vector<double>& a, size_t i) { return {a[3 * i], a[3 * i + 1], a[3 * i + 2]}; }
 
 inline Q to_eigen(const Quaternion& q) { return Q(q[0], q[1], q[2], q[3]); }
 inline Quaternion to_quaternion(const Q& q) { return {q.w(), q.x(), q.y(), q.z()}; }

@@ -11,8 +11,6 @@
 namespace ctsurg::sim {
 namespace {
 
-V3 at(const std::vector<double>& a, size_t i) { return {a[3 * i], a[3 * i + 1], a[3 * i + 2]}; }
-
 // The pieces of branch b: [k0, k1] ring ranges (indices within the branch) joined by alive segments.
 template <typename F>
 void for_each_piece(const VesselChain& ch, const std::vector<uint8_t>& alive, int32_t b, F&& f) {

@@ -32,7 +32,7 @@ class FakeEngine final : public SimulationEngine {
   std::shared_ptr<std::vector<Call>> calls = std::make_shared<std::vector<Call>>();  // shared: outlives a run
   int checks = 0;
 
-  EngineCounts counts() const override { return {2, 1, 1, 0, 2 * dt_}; }
+  EngineCounts counts() const override { return {.nodes = 2, .fixed = 1, .springs = 1, .elements = 0, .critical_dt_s = 2 * dt_}; }
   const Vec3& origin() const override { return origin_; }
   const std::vector<double>& rest_positions() const override { return rest_; }
   bool has_surface() const override { return false; }

@@ -30,12 +30,9 @@ struct TetMesh;
 
 namespace ctsurg::sim {
 
-// The most materials one model may have (the kernels carry them by value: kernels/fem_forces_impl.h).
-inline constexpr int kFemModelMaxMaterials = 16;
-
 struct FemModel {
   // The materials: element e has materials[element_material[e]], or materials[0] for every element when
-  // element_material is empty (one material). 1 .. kFemModelMaxMaterials, each validated.
+  // element_material is empty (one material). 1 .. kFemMaxMaterials, each validated.
   std::vector<FemMaterial> materials;
   std::vector<LameParameters> lame;           // #M: each material's mu and lambda
   std::vector<int32_t> element_material;      // #T indices into materials, or empty
@@ -68,7 +65,7 @@ struct FemModel {
 
 // Builds the model from nodes (#N x 3, LPS mm) and tets (#T x 4, node ids). Throws
 // InputError("fem model", field, ...) for: a material out of range (validate_fem_material), more than
-// kFemModelMaxMaterials materials or an element_material (#T, or empty for materials[0] everywhere) that
+// kFemMaxMaterials materials or an element_material (#T, or empty for materials[0] everywhere) that
 // is not #T ids of them ("materials"), sizes that are not multiples of 3 and 4, no tets, a non-finite node ("nodes"), a node id out of range, an
 // inverted tet (signed volume <= 0: "tet 17 is inverted ...") or a degenerate one (|V| below 1e-9 of
 // its longest edge cubed: "tet 17 is degenerate ...") ("tets"), all before anything is solved.

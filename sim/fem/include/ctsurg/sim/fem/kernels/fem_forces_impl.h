@@ -9,10 +9,6 @@
 
 namespace ctsurg::sim {
 
-// The most materials one model's elements may have (a view carries them by value, so a kernel launch
-// needs no extra buffer).
-inline constexpr int kFemMaxMaterials = 16;
-
 template <class T>
 struct FemElementView {
   const int32_t* tets = nullptr;  // #T x 4
@@ -22,8 +18,7 @@ struct FemElementView {
   int32_t order = 1;              // 1: tets #T x 4; 2: #T x 10 (quadratic; host only)
   // Element e's law and constants: materials[element_material[e]], or materials[0] for every element
   // when element_material is null (one material).
-  const int32_t* element_material = nullptr;  // #T, each < material_count
-  int32_t material_count = 1;
+  const int32_t* element_material = nullptr;  // #T, each < the model's material count
   FemLawParameters<T> materials[kFemMaxMaterials];
 
   CTSURG_HD const FemLawParameters<T>& material(int32_t e) const { return materials[element_material ? element_material[e] : 0]; }

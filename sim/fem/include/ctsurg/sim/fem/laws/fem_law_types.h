@@ -28,6 +28,10 @@ inline constexpr int kFemLawCount = 5;  // ids 0 .. kFemLawCount - 1
 // The constants a law may carry beyond the Lame parameters (mooney_rivlin: c10, c01).
 inline constexpr int kFemLawConstants = 2;
 
+// The most materials one model's elements may have (the kernels' element view carries them by value, so
+// a kernel launch needs no extra buffer: kernels/fem_forces_impl.h).
+inline constexpr int kFemMaxMaterials = 16;
+
 // One material as the kernels see it: its law, the small-strain Lame parameters mu (shear modulus) and
 // lambda, Pa, and the law's own constants c[] (kInfo.constant_names says which, in Pa).
 template <class T>
