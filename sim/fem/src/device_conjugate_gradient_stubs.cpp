@@ -9,15 +9,15 @@
 
 namespace ctsurg::sim {
 namespace {
-[[noreturn]] void unreachable() { throw RuntimeError("device conjugate gradient: this build has no CUDA"); }
+[[noreturn]] void no_cuda_cg() { throw RuntimeError("device conjugate gradient: this build has no CUDA"); }
 }  // namespace
 
 struct DeviceConjugateGradient::Device {};
 
 DeviceConjugateGradient::DeviceConjugateGradient(const char* where) { require_backend(Backend::cuda, where); }
 DeviceConjugateGradient::~DeviceConjugateGradient() = default;
-void DeviceConjugateGradient::set_pattern(int32_t, const int32_t*, const int32_t*) { unreachable(); }
-void DeviceConjugateGradient::set_values(const double*) { unreachable(); }
-DeviceCgResult DeviceConjugateGradient::solve(const double*, double*, double, int64_t) { unreachable(); }
+void DeviceConjugateGradient::set_pattern(int32_t, const int32_t*, const int32_t*) { no_cuda_cg(); }
+void DeviceConjugateGradient::set_values(const double*) { no_cuda_cg(); }
+DeviceCgResult DeviceConjugateGradient::solve(const double*, double*, double, int64_t) { no_cuda_cg(); }
 
 }  // namespace ctsurg::sim

@@ -9,7 +9,7 @@
 
 namespace ctsurg::sim {
 namespace {
-[[noreturn]] void unreachable() { throw RuntimeError("fem device dynamics: this build has no CUDA"); }
+[[noreturn]] void no_cuda_dynamics() { throw RuntimeError("fem device dynamics: this build has no CUDA"); }
 }  // namespace
 
 struct FemDeviceDynamics::Device {};
@@ -19,14 +19,14 @@ FemDeviceDynamics::FemDeviceDynamics(const FemModel&, const std::vector<Real>&, 
   require_backend(Backend::cuda, where);
 }
 FemDeviceDynamics::~FemDeviceDynamics() = default;
-void FemDeviceDynamics::set_inverse_mass(const std::vector<Real>&) { unreachable(); }
-void FemDeviceDynamics::zero_nodes(const std::vector<int32_t>&) { unreachable(); }
-void FemDeviceDynamics::set_prescribed(const std::vector<int32_t>&, const std::vector<Real>&) { unreachable(); }
-void FemDeviceDynamics::set_external_forces(const std::vector<Real>&) { unreachable(); }
-void FemDeviceDynamics::set_contact_sphere(const FemSphereView&) { unreachable(); }
-FemDeviceStepOutcome FemDeviceDynamics::step(int64_t, int64_t) { unreachable(); }
-std::vector<Real> FemDeviceDynamics::displacements() const { unreachable(); }
-double FemDeviceDynamics::kinetic_energy() const { unreachable(); }
-std::vector<Real> FemDeviceDynamics::internal_forces() { unreachable(); }
+void FemDeviceDynamics::set_inverse_mass(const std::vector<Real>&) { no_cuda_dynamics(); }
+void FemDeviceDynamics::zero_nodes(const std::vector<int32_t>&) { no_cuda_dynamics(); }
+void FemDeviceDynamics::set_prescribed(const std::vector<int32_t>&, const std::vector<Real>&) { no_cuda_dynamics(); }
+void FemDeviceDynamics::set_external_forces(const std::vector<Real>&) { no_cuda_dynamics(); }
+void FemDeviceDynamics::set_contact_sphere(const FemSphereView&) { no_cuda_dynamics(); }
+FemDeviceStepOutcome FemDeviceDynamics::step(int64_t, int64_t) { no_cuda_dynamics(); }
+std::vector<Real> FemDeviceDynamics::displacements() const { no_cuda_dynamics(); }
+double FemDeviceDynamics::kinetic_energy() const { no_cuda_dynamics(); }
+std::vector<Real> FemDeviceDynamics::internal_forces() { no_cuda_dynamics(); }
 
 }  // namespace ctsurg::sim

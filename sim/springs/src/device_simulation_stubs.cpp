@@ -14,26 +14,26 @@ DeviceSimulation::Impl::Impl(int) { require_backend(Backend::cuda, "device simul
 DeviceSimulation::Impl::~Impl() = default;
 
 namespace {
-[[noreturn]] void unreachable() { throw RuntimeError("device simulation: this build has no CUDA"); }
+[[noreturn]] void no_cuda_simulation() { throw RuntimeError("device simulation: this build has no CUDA"); }
 }  // namespace
 
-DeviceInfo DeviceSimulation::Impl::info() const { unreachable(); }
-void DeviceSimulation::Impl::upload_grid(const SpringGridModel&, const ParticleState&) { unreachable(); }
-void DeviceSimulation::Impl::upload_explicit(const ExplicitSpringModel&, const ParticleState&) { unreachable(); }
-void DeviceSimulation::Impl::upload_state(const ParticleState&) { unreachable(); }
-void DeviceSimulation::Impl::step(int64_t, const VerletConstants&) { unreachable(); }
-void DeviceSimulation::Impl::normals(const VerletConstants&, ParticleNormals&) { unreachable(); }
-int64_t DeviceSimulation::Impl::probe(const SphereView&) { unreachable(); }
-Grab DeviceSimulation::Impl::grab(const SphereView&, int*) { unreachable(); }
-void DeviceSimulation::Impl::apply_grab(int, const SphereView&) { unreachable(); }
-void DeviceSimulation::Impl::release_grab(int) { unreachable(); }
-int64_t DeviceSimulation::Impl::cut(const TriangleView&) { unreachable(); }
-void DeviceSimulation::Impl::set_surface(const int32_t*, const Real*, const Real*, int64_t, const Real*) { unreachable(); }
-void DeviceSimulation::Impl::move_surface_async() { unreachable(); }
-std::span<const float> DeviceSimulation::Impl::wait_surface() { unreachable(); }
-void DeviceSimulation::Impl::download_state(ParticleState&) const { unreachable(); }
-void DeviceSimulation::Impl::download_grid_masks(uint32_t*) const { unreachable(); }
-void DeviceSimulation::Impl::download_alive(uint8_t*) const { unreachable(); }
-void DeviceSimulation::Impl::synchronize() const { unreachable(); }
+DeviceInfo DeviceSimulation::Impl::info() const { no_cuda_simulation(); }
+void DeviceSimulation::Impl::upload_grid(const SpringGridModel&, const ParticleState&) { no_cuda_simulation(); }
+void DeviceSimulation::Impl::upload_explicit(const ExplicitSpringModel&, const ParticleState&) { no_cuda_simulation(); }
+void DeviceSimulation::Impl::upload_state(const ParticleState&) { no_cuda_simulation(); }
+void DeviceSimulation::Impl::step(int64_t, const VerletConstants&) { no_cuda_simulation(); }
+void DeviceSimulation::Impl::normals(const VerletConstants&, ParticleNormals&) { no_cuda_simulation(); }
+int64_t DeviceSimulation::Impl::probe(const SphereView&) { no_cuda_simulation(); }
+Grab DeviceSimulation::Impl::grab(const SphereView&, int*) { no_cuda_simulation(); }
+void DeviceSimulation::Impl::apply_grab(int, const SphereView&) { no_cuda_simulation(); }
+void DeviceSimulation::Impl::release_grab(int) { no_cuda_simulation(); }
+int64_t DeviceSimulation::Impl::cut(const TriangleView&) { no_cuda_simulation(); }
+void DeviceSimulation::Impl::set_surface(const int32_t*, const Real*, const Real*, int64_t, const Real*) { no_cuda_simulation(); }
+void DeviceSimulation::Impl::move_surface_async() { no_cuda_simulation(); }
+std::span<const float> DeviceSimulation::Impl::wait_surface() { no_cuda_simulation(); }
+void DeviceSimulation::Impl::download_state(ParticleState&) const { no_cuda_simulation(); }
+void DeviceSimulation::Impl::download_grid_masks(uint32_t*) const { no_cuda_simulation(); }
+void DeviceSimulation::Impl::download_alive(uint8_t*) const { no_cuda_simulation(); }
+void DeviceSimulation::Impl::synchronize() const { no_cuda_simulation(); }
 
 }  // namespace ctsurg::sim
