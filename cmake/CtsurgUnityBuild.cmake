@@ -8,8 +8,8 @@
 # own. For the files that call a heavy third-party shared library (OpenCV, ITK and GDCM, assimp, OSMesa):
 # in a batch, a program that needs any neighbour of theirs would load that library too, and OpenCV's
 # imgcodecs alone costs a program 0.24 s at every start (GDAL's tree of 140 libraries), paid by every
-# test case and every tool run. For CGAL's two files: each compiles longer than a batch of eight others,
-# so alone they build in parallel with the rest.
+# test case and every tool run. For CGAL's two files: they are the longest to compile (the batch holding
+# tetrahedral_meshing.cpp took 134 s), so alone they build in parallel with the rest.
 function(ctsurg_compile_alone)
   set_source_files_properties(${ARGN} PROPERTIES SKIP_UNITY_BUILD_INCLUSION ON)
 endfunction()

@@ -29,9 +29,9 @@ FemElementView<T> fem_element_view(const FemModel& model, const T* dm_inverse, c
 
 // Element e's law and constants, what a double view's material(e) gives, without building the view.
 inline FemLawParameters<double> fem_element_law(const FemModel& model, int32_t e) {
-  const std::size_t k = static_cast<std::size_t>(model.material_index(e));
-  const FemMaterial& m = model.materials[k];
-  return {m.law, model.lame[k].mu, model.lame[k].lambda, {m.constants[0], m.constants[1]}};
+  const FemMaterial& m = model.material_of(e);
+  const LameParameters& l = model.lame_of(e);
+  return {m.law, l.mu, l.lambda, {m.constants[0], m.constants[1]}};
 }
 
 // A host view (element_material: the model's own).
