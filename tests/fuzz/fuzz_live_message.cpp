@@ -63,8 +63,8 @@ std::string json_of(const LiveMessage& m) {
   switch (m.type) {
     case LiveMessage::Type::begin:
       j["type"] = "begin";
-      j["tool"] = m.tool == ToolKind::grab ? "grab" : m.tool == ToolKind::probe ? "probe" : "cut";
-      if (m.tool == ToolKind::cut) {
+      j["tool"] = m.tool->name;
+      if (m.tool->record == ToolRecord::blade) {
         j["blade_edge_mm"] = vec(m.blade_edge_mm);
       } else {
         j["radius_mm"] = m.radius_mm;
@@ -99,12 +99,13 @@ void check_message(std::string_view text, const LiveMessage& m, const LiveProtoc
   using T = LiveMessage::Type;
   if (m.type == T::begin) {
     check(inside(m.position_mm, limits), "begin: position outside the box + margin, or not finite");
-    if (m.tool == ToolKind::cut) {
+    check(m.tool != nullptr && m.tool->live, "begin: no tool, or one the page cannot begin");
+    if (m.tool->record == ToolRecord::blade) {
       const auto& e = m.blade_edge_mm;
       const double l = std::sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]);
       check(std::isfinite(l) && l > 0 && l <= kMaxLiveBladeMm, "begin cut: blade edge length outside (0, 200] mm");
     } else {
-      check(m.tool == ToolKind::grab || m.tool == ToolKind::probe, "begin: a tool other than grab, probe or cut");
+      check(m.tool->live && m.tool->record == ToolRecord::sphere, "begin: a tool the page cannot begin");
       check(m.radius_mm > 0 && m.radius_mm <= kMaxLiveToolRadiusMm, "begin: radius outside (0, 50] mm");
     }
   } else if (m.type == T::move) {

@@ -2,14 +2,15 @@
 
 namespace ctsurg::sim {
 
-const char* to_string(ToolKind kind) {
-  switch (kind) {
-    case ToolKind::grab: return "grab";
-    case ToolKind::probe: return "probe";
-    case ToolKind::cut: return "cut";
-    case ToolKind::force: return "force";
-    case ToolKind::instrument: return "instrument";
-    case ToolKind::suture: return "suture";
+const char* to_string(ToolPrimitive primitive) {
+  switch (primitive) {
+    case ToolPrimitive::hold: return "hold";
+    case ToolPrimitive::load: return "load";
+    case ToolPrimitive::push_sphere: return "push_sphere";
+    case ToolPrimitive::push_shape: return "push_shape";
+    case ToolPrimitive::separate: return "separate";
+    case ToolPrimitive::stitch: return "stitch";
+    case ToolPrimitive::remove: return "remove";
   }
   return "?";
 }

@@ -232,7 +232,7 @@ double FemEngine::blade_sweep_mm() const {
 
 void FemEngine::apply_cuts(const std::vector<ToolInput>& tools) {
   bool any = false;
-  for (const ToolInput& tool : tools) any = any || (tool.kind == ToolKind::cut && !tool.sweeps.empty());
+  for (const ToolInput& tool : tools) any = any || (tool.acts == ToolPrimitive::separate && !tool.sweeps.empty());
   if (!any) return;
   if (!separation_) {
     separation_ = std::make_unique<FemTetSeparation>(model_);
@@ -257,7 +257,7 @@ void FemEngine::apply_cuts(const std::vector<ToolInput>& tools) {
   std::vector<int32_t> tets = model_.tets, parents;
   const int32_t n0 = model_.node_count();
   for (const ToolInput& tool : tools) {
-    if (tool.kind != ToolKind::cut) continue;
+    if (tool.acts != ToolPrimitive::separate) continue;
     for (const auto& [from, to] : tool.sweeps) {
       for (const Triangle& tri : swept_blade(from, to, tool.blade_edge_mm)) {
         const FemCutResult r = separation_->cut(tets, n0 + static_cast<int32_t>(parents.size()), positions, tri);
@@ -312,7 +312,7 @@ void FemEngine::split_nodes(const std::vector<int32_t>& tets, const std::vector<
       if (held[static_cast<size_t>(k)]) continue;
       std::string label = "tools";
       for (const ToolInput& tool : tools)
-        if (tool.kind == ToolKind::cut && !tool.sweeps.empty()) label = tool.label;
+        if (tool.acts == ToolPrimitive::separate && !tool.sweeps.empty()) label = tool.label;
       throw InputError(options_.where, label, "the cut frees a piece of the mesh that no support holds; a static solve cannot place it: "
                                               "use solver: dynamic or implicit, or fix a region of that piece");
     }
@@ -393,16 +393,31 @@ double FemEngine::time() const { return dynamics_ ? dynamics_->time() : implicit
 
 void FemEngine::check_tools(const std::vector<ToolInput>& tools) const {
   for (const ToolInput& tool : tools) {
-    if (tool.kind == ToolKind::cut && model_.order != 1) {
-      throw InputError(options_.where, tool.label, "cutting needs linear (4-node) tets; quadratic elements are not cut");
-    }
-    if (tool.kind == ToolKind::cut && backend_ != Backend::cpu) {
-      throw InputError(options_.where, tool.label, "cutting an FEM model runs on the cpu backend only; set backend: cpu");
-    }
-    if ((tool.kind == ToolKind::probe || tool.kind == ToolKind::instrument) && !dynamics_) {
-      throw InputError(options_.where, tool.label,
-                       std::string(to_string(tool.kind)) +
-                           " needs solver: dynamic (contact is part of the explicit dynamics only, not of the static or implicit solvers)");
+    switch (tool.acts) {
+      case ToolPrimitive::hold:
+      case ToolPrimitive::load:
+        break;
+      case ToolPrimitive::separate:
+        if (model_.order != 1) {
+          throw InputError(options_.where, tool.label, "cutting needs linear (4-node) tets; quadratic elements are not cut");
+        }
+        if (backend_ != Backend::cpu) {
+          throw InputError(options_.where, tool.label, "cutting an FEM model runs on the cpu backend only; set backend: cpu");
+        }
+        break;
+      case ToolPrimitive::push_sphere:
+      case ToolPrimitive::push_shape:
+        if (!dynamics_) {
+          throw InputError(options_.where, tool.label,
+                           tool.name +
+                               " needs solver: dynamic (contact is part of the explicit dynamics only, not of the static or implicit solvers)");
+        }
+        break;
+      case ToolPrimitive::stitch:
+      case ToolPrimitive::remove:
+        throw InputError(options_.where, tool.label,
+                         tool.name + " runs on the spring models only (kind: spring_grid or explicit_springs); the FEM engine "
+                                     "neither stitches nor removes elements yet");
     }
   }
 }
@@ -426,7 +441,7 @@ StabilityReport FemEngine::step(const std::vector<ToolInput>& tools, int steps) 
   std::array<double, 3> centre{0, 0, 0};
   double radius = 0;
   for (const ToolInput& tool : tools) {
-    if (tool.kind == ToolKind::probe && tool.active) {
+    if (tool.acts == ToolPrimitive::push_sphere && tool.active) {
       centre = tool.centre;
       radius = tool.radius_mm;
       break;
@@ -435,7 +450,7 @@ StabilityReport FemEngine::step(const std::vector<ToolInput>& tools, int steps) 
   dynamics_->set_contact_sphere(centre, radius);
   instrument_views_.clear();
   for (const ToolInput& tool : tools) {
-    if (tool.kind != ToolKind::instrument || !tool.active) continue;
+    if (tool.acts != ToolPrimitive::push_shape || !tool.active) continue;
     if (!tool.instrument) throw InputError(options_.where, tool.label, "the instrument has no shape");
     instrument_views_.push_back(instrument_view(*tool.instrument, tool.orientation, tool.centre));
   }
@@ -470,7 +485,7 @@ void FemEngine::equilibrium(const std::vector<ToolInput>& tools, double time) {
     seeds_.clear();
     seed_radii_.clear();
     for (size_t t = 0; t < tools.size(); ++t) {
-      if (tools[t].kind != ToolKind::grab && tools[t].kind != ToolKind::force) continue;
+      if (tools[t].acts != ToolPrimitive::hold && tools[t].acts != ToolPrimitive::load) continue;
       const std::vector<int32_t>& held = holds_.held_nodes(t);
       seeds_.insert(seeds_.end(), held.begin(), held.end());
       seed_radii_.resize(seeds_.size(), tools[t].local_region_mm > 0 ? tools[t].local_region_mm : *options_.local_region_mm);

@@ -51,7 +51,7 @@ const std::vector<int32_t>& FemToolHolds::held_nodes(size_t tool) const {
 
 bool FemToolHolds::captures(const std::vector<ToolInput>& tools) const {
   for (size_t i = 0; i < tools.size(); ++i) {
-    if (tools[i].kind != ToolKind::grab && tools[i].kind != ToolKind::force) continue;
+    if (tools[i].acts != ToolPrimitive::hold && tools[i].acts != ToolPrimitive::load) continue;
     const bool held = i < holds_.size() && (!holds_[i].nodes.empty() || holds_[i].released);
     if (tools[i].active && !held) return true;
   }
@@ -64,7 +64,7 @@ void FemToolHolds::update_grabs(const std::vector<ToolInput>& tools, double t, c
   displacements.clear();
   for (size_t i = 0; i < tools.size(); ++i) {
     const ToolInput& tool = tools[i];
-    if (tool.kind != ToolKind::grab) continue;
+    if (tool.acts != ToolPrimitive::hold) continue;
     Hold& g = hold(i);
     if (g.nodes.empty() && !g.released && tool.active) {
       const double when = capture_at_start ? tool.start_s : t;
@@ -112,7 +112,7 @@ bool FemToolHolds::update_forces(const std::vector<ToolInput>& tools, const std:
   bool changed = false;
   for (size_t i = 0; i < tools.size(); ++i) {
     const ToolInput& tool = tools[i];
-    if (tool.kind != ToolKind::force) continue;
+    if (tool.acts != ToolPrimitive::load) continue;
     Hold& f = hold(i);
     if (f.nodes.empty() && !f.released && tool.active) {
       f.nodes = free_nodes_in_sphere(model_, u, held_axes_, capture_at_start ? tool.start_centre : tool.centre, tool.radius_mm);
@@ -132,7 +132,7 @@ bool FemToolHolds::update_forces(const std::vector<ToolInput>& tools, const std:
   if (!changed) return false;
   nodal_forces_.clear();
   for (size_t i = 0; i < tools.size(); ++i) {
-    if (tools[i].kind != ToolKind::force || !engaged(i)) continue;
+    if (tools[i].acts != ToolPrimitive::load || !engaged(i)) continue;
     const Hold& f = holds_[i];
     if (nodal_forces_.empty()) nodal_forces_.assign(static_cast<size_t>(3 * model_.node_count()), 0.0);
     for (size_t a = 0; a < 3; ++a) {

@@ -28,7 +28,7 @@ YAML::Node vec3_node(const std::array<double, 3>& v) {
 
 YAML::Node tool_node(const ToolAction& tool) {
   YAML::Node body(YAML::NodeType::Map);
-  if (tool.kind == ToolKind::cut) {
+  if (tool.type->record == ToolRecord::blade) {
     body["blade_edge_mm"] = vec3_node(tool.blade_edge_mm);
   } else {
     body["radius_mm"] = exact_number(tool.radius_mm);
@@ -45,7 +45,7 @@ YAML::Node tool_node(const ToolAction& tool) {
   }
   body["path"] = path;
   YAML::Node item(YAML::NodeType::Map);
-  item[to_string(tool.kind)] = body;
+  item[tool.kind()] = body;
   return item;
 }
 
@@ -75,7 +75,7 @@ std::string live_scenario_text(const std::string& text, const Scenario& s, const
   if (root["tools"] && root["tools"].IsSequence()) {
     for (size_t i = 0; i < s.tools.size() && i < root["tools"].size(); ++i) {
       YAML::Node item = root["tools"][i];
-      if (s.tools[i].kind == ToolKind::instrument && item["instrument"]) {
+      if (s.tools[i].type->record == ToolRecord::instrument && item["instrument"]) {
         item["instrument"]["mesh"] = fs::absolute(s.tools[i].instrument_mesh).lexically_normal().string();
       }
     }

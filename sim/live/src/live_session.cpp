@@ -59,11 +59,14 @@ void LiveSession::build(const std::vector<ToolAction>& user_tools, int64_t repla
 }
 
 int LiveSession::begin_tool(const LiveToolSpec& spec) {
-  if (spec.kind != ToolKind::grab && spec.kind != ToolKind::probe && spec.kind != ToolKind::cut) {
-    throw InputError(kSessionWhere, "tool", std::string(to_string(spec.kind)) + " is not a live tool (grab, probe, cut)");
+  if (spec.kind == nullptr || !spec.kind->live) {
+    std::string live;
+    for (const ToolType* t : tool_types())
+      if (t->live) live += (live.empty() ? "" : ", ") + std::string(t->name);
+    throw InputError(kSessionWhere, "tool", std::string(spec.kind ? spec.kind->name : "no tool") + " is not a live tool (" + live + ")");
   }
   if (!finite3(spec.position_mm)) throw InputError(kSessionWhere, "position_mm", "must be three finite numbers");
-  if (spec.kind == ToolKind::cut) {
+  if (spec.kind->record == ToolRecord::blade) {
     const double l = length(spec.blade_edge_mm);
     if (!finite3(spec.blade_edge_mm) || !(l > 0) || l > kMaxLiveBladeMm) {
       throw InputError(kSessionWhere, "blade_edge_mm", "the blade's length must be in (0, " + exact_number(kMaxLiveBladeMm) + "] mm");
@@ -126,12 +129,13 @@ void LiveSession::apply_pending() {
     switch (p.kind) {
       case Pending::Kind::begin: {
         ToolAction tool;
-        tool.kind = p.spec.kind;
-        tool.label = "tools[" + std::to_string(i) + "] (" + to_string(p.spec.kind) + ")";
+        tool.type = p.spec.kind;
+        tool.label = "tools[" + std::to_string(i) + "] (" + p.spec.kind->name + ")";
         tool.start_s = t1;
         tool.end_s = std::numeric_limits<double>::infinity();
-        tool.radius_mm = p.spec.kind == ToolKind::cut ? 0 : p.spec.radius_mm;
-        if (p.spec.kind == ToolKind::cut) tool.blade_edge_mm = p.spec.blade_edge_mm;
+        const bool blade = p.spec.kind->record == ToolRecord::blade;
+        tool.radius_mm = blade ? 0 : p.spec.radius_mm;
+        if (blade) tool.blade_edge_mm = p.spec.blade_edge_mm;
         Keyframe k;
         k.t = t1;
         k.point = {PointSpec::Kind::position_mm, p.spec.position_mm};
@@ -332,7 +336,7 @@ Trajectory LiveSession::trajectory() const {
   const ToolTimeline& timeline = loop_->timeline();
   size_t spheres = 0, blades = 0;
   for (size_t i = scenario_.tools.size() + recorded_tools().size(); i < timeline.size(); ++i) {
-    ++(timeline.tool(i).kind == ToolKind::cut ? blades : spheres);
+    ++(timeline.tool(i).type->record == ToolRecord::blade ? blades : spheres);
   }
   const auto drop = [&](std::vector<double>& data, size_t columns, size_t width, size_t dropped) {
     if (dropped == 0) return;

@@ -3,8 +3,6 @@
 #include "ctsurg/core/error.h"
 #include "ctsurg/core/input_file.h"
 #include "ctsurg/sim/scenario/scenario_model.h"
-#include "ctsurg/sim/springs/suture.h"
-#include "point_field.h"
 #include "scenario_material.h"
 #include "yaml_field.h"
 
@@ -28,170 +26,26 @@ fs::path resolve(const fs::path& base, const std::string& p) {
   return q.is_absolute() ? q : base / q;
 }
 
-// A keyframe's orientation: quaternion: [w, x, y, z] or rotation: {axis: [x, y, z], angle_deg: a}.
-std::optional<Quaternion> rotation_of(const YamlField& key) {
-  if (key.has("quaternion") && key.has("rotation")) key.fail("give one of quaternion, rotation");
-  if (key.has("quaternion")) {
-    const YamlField q = key.child("quaternion");
-    const auto items = q.items();
-    if (items.size() != 4) q.fail("expected [w, x, y, z]");
-    Quaternion v{};
-    for (size_t i = 0; i < 4; ++i) v[i] = items[i].number();
-    return checked_rotation(v, q.file(), q.path());
-  }
-  if (key.has("rotation")) {
-    const YamlField r = key.child("rotation");
-    r.only({"axis", "angle_deg"});
-    return axis_angle_rotation(r.child("axis").vec3(), r.child("angle_deg").number(), r.file(), r.path());
-  }
-  return std::nullopt;
-}
-
-double distance(const std::array<double, 3>& a, const std::array<double, 3>& b) {
-  return std::sqrt(std::pow(b[0] - a[0], 2) + std::pow(b[1] - a[1], 2) + std::pow(b[2] - a[2], 2));
-}
-
-// suture: {start_s, end_s, stitches: [{a, b}], along: {from, to, count, width_mm, across}, target_length_mm,
-// stiffness_ratio}: the window is required (the knots tighten over it), no path.
-ToolAction suture_of(const YamlField& f, const std::string& label) {
-  f.only({"start_s", "end_s", "stitches", "along", "target_length_mm", "stiffness_ratio"});
-  ToolAction t;
-  t.kind = ToolKind::suture;
-  t.label = label;
-  t.start_s = f.child("start_s").non_negative();
-  t.end_s = f.child("end_s").positive();
-  if (!(t.end_s > t.start_s)) f.child("end_s").fail("must be after start_s (the knots tighten from start_s to end_s)");
-  if (f.has("target_length_mm")) {
-    t.stitch_target_mm = f.child("target_length_mm").non_negative();
-    if (t.stitch_target_mm > kMaxStitchLengthMm) f.child("target_length_mm").fail("must be at most " + YamlField::num(kMaxStitchLengthMm) + " mm");
-  }
-  if (f.has("stiffness_ratio")) {
-    t.stitch_stiffness_ratio = f.child("stiffness_ratio").positive();
-    if (t.stitch_stiffness_ratio > 1000) f.child("stiffness_ratio").fail("must be at most 1000 (x the stiffest spring)");
-  }
-  if (f.has("stitches")) {
-    const auto items = f.child("stitches").items();
-    for (size_t k = 0; k < items.size(); ++k) {
-      items[k].only({"a", "b"});
-      StitchSpec st{items[k].child("a").vec3(), items[k].child("b").vec3(), items[k].path()};
-      const double len = distance(st.a, st.b);
-      if (!(len > 1e-6)) items[k].child("b").fail("is the same point as a (a stitch joins two points)");
-      if (len > kMaxStitchLengthMm) {
-        items[k].child("b").fail("is " + YamlField::num(len) + " mm from a (at most " + YamlField::num(kMaxStitchLengthMm) + " mm)");
-      }
-      t.stitches.push_back(st);
-    }
-  }
-  if (f.has("along")) {
-    const YamlField a = f.child("along");
-    a.only({"from", "to", "count", "width_mm", "across"});
-    SutureLine line;
-    line.from = a.child("from").vec3();
-    line.to = a.child("to").vec3();
-    line.count = static_cast<int>(a.child("count").integer(1, 1000));
-    line.width_mm = a.child("width_mm").positive();
-    line.field = a.path();
-    if (line.width_mm > kMaxStitchLengthMm) a.child("width_mm").fail("must be at most " + YamlField::num(kMaxStitchLengthMm) + " mm");
-    const double len = distance(line.from, line.to);
-    if (!(len > 1e-6)) a.child("to").fail("is the same point as from (the line needs a direction)");
-    if (a.has("across")) {
-      const std::array<double, 3> c = a.child("across").vec3();
-      const std::array<double, 3> d{(line.to[0] - line.from[0]) / len, (line.to[1] - line.from[1]) / len, (line.to[2] - line.from[2]) / len};
-      const double n = std::sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
-      const double along = std::abs(c[0] * d[0] + c[1] * d[1] + c[2] * d[2]);
-      if (!(n > 0) || along > 0.99 * n) a.child("across").fail("must not be zero or along the line");
-      line.across = c;
-    }
-    t.along = line;
-  }
-  if (t.stitches.empty() && !t.along) f.fail("give stitches: [{a, b}, ...] and/or along: {from, to, count, width_mm}");
-  return t;
-}
-
-ToolAction tool_of(const YamlField& item, const fs::path& base_dir, bool grab_rotation) {
-  if (!item.is_map()) item.fail("expected one of grab:, clamp:, probe:, cut:, force:, instrument:, suture: with the tool's fields under it");
+// One tool: exactly one key of the registry (tool_type.h), whose type reads its own section.
+ToolAction tool_of(const YamlField& item, const ToolParseContext& context) {
+  const std::string expected = "expected one of " + tool_type_names(":") + " with the tool's fields under it";
+  if (!item.is_map()) item.fail(expected);
+  const ToolType* type = nullptr;
   int kinds = 0;
-  ToolAction t;
-  std::string key;
-  for (const char* k : {"grab", "clamp", "probe", "cut", "force", "instrument", "suture"}) {
-    if (item.has(k)) {
+  std::vector<std::string> names;
+  for (const ToolType* t : tool_types()) {
+    names.emplace_back(t->name);
+    if (item.has(t->name)) {
       ++kinds;
-      key = k;
+      type = t;
     }
   }
-  item.only({"grab", "clamp", "probe", "cut", "force", "instrument", "suture"});
-  if (kinds != 1) item.fail("each tool is exactly one of grab:, clamp:, probe:, cut:, force:, instrument:, suture:");
-  const YamlField f = item.child(key);
-  if (key == "suture") return suture_of(f, item.path() + " (suture)");
-  if (key == "clamp") {
-    // A clamp: a grab that stays where it is put (one keyframe), pinning what it captures for its window.
-    f.only({"start_s", "end_s", "radius_mm", "position_mm", "at_fraction", "snap_to_tissue", "local_region_mm"});
-    t.kind = ToolKind::grab;
-    t.label = item.path() + " (clamp)";
-    t.radius_mm = f.child("radius_mm").positive();
-    if (f.has("local_region_mm")) t.local_region_mm = f.child("local_region_mm").positive();
-    t.start_s = f.has("start_s") ? f.child("start_s").non_negative() : 0.0;
-    t.end_s = f.has("end_s") ? f.child("end_s").positive() : std::numeric_limits<double>::infinity();
-    if (!(t.end_s > t.start_s)) f.child("end_s").fail("must be after start_s");
-    Keyframe k;
-    k.t = t.start_s;
-    k.point = point_of(f, false);
-    t.path.push_back(k);
-    if (f.has("snap_to_tissue")) t.snap_to_tissue = f.child("snap_to_tissue").boolean();
-    return t;
-  }
-  t.kind = key == "grab"    ? ToolKind::grab
-           : key == "probe" ? ToolKind::probe
-           : key == "cut"   ? ToolKind::cut
-           : key == "force" ? ToolKind::force
-                            : ToolKind::instrument;
-  t.label = item.path() + " (" + key + ")";
-  if (t.kind == ToolKind::cut) {
-    f.only({"start_s", "end_s", "path", "blade_edge_mm", "snap_to_tissue"});
-    t.blade_edge_mm = f.child("blade_edge_mm").vec3();
-    if (t.blade_edge_mm == std::array<double, 3>{0, 0, 0}) f.child("blade_edge_mm").fail("the blade edge must not be zero");
-  } else if (t.kind == ToolKind::force) {
-    f.only({"start_s", "end_s", "path", "radius_mm", "force_n", "snap_to_tissue", "local_region_mm"});
-    t.radius_mm = f.child("radius_mm").positive();
-    t.force_n = f.child("force_n").vec3();
-    if (f.has("local_region_mm")) t.local_region_mm = f.child("local_region_mm").positive();
-  } else if (t.kind == ToolKind::instrument) {
-    f.only({"start_s", "end_s", "path", "mesh", "grid_spacing_mm", "snap_to_tissue"});
-    const std::string mesh = f.child("mesh").text();
-    if (mesh.empty()) f.child("mesh").fail("must name a .stl, .obj or .ply file");
-    t.instrument_mesh = resolve(base_dir, mesh);
-    if (f.has("grid_spacing_mm")) t.instrument_spacing_mm = f.child("grid_spacing_mm").positive();
-  } else if (t.kind == ToolKind::grab) {
-    f.only({"start_s", "end_s", "path", "radius_mm", "snap_to_tissue", "local_region_mm"});
-    t.radius_mm = f.child("radius_mm").positive();
-    if (f.has("local_region_mm")) t.local_region_mm = f.child("local_region_mm").positive();
-  } else {
-    f.only({"start_s", "end_s", "path", "radius_mm", "snap_to_tissue"});
-    t.radius_mm = f.child("radius_mm").positive();
-  }
-  const auto keys = f.child("path").items();
-  if (keys.empty()) f.child("path").fail("needs at least one keyframe");
-  for (size_t i = 0; i < keys.size(); ++i) {
-    if (t.kind == ToolKind::instrument || t.kind == ToolKind::grab) {
-      keys[i].only({"t", "position_mm", "at_fraction", "offset_mm", "quaternion", "rotation"});
-    } else {
-      keys[i].only({"t", "position_mm", "at_fraction", "offset_mm"});
-    }
-    Keyframe k;
-    k.t = keys[i].child("t").non_negative();
-    if (i > 0 && !(k.t > t.path.back().t)) keys[i].child("t").fail("keyframe times must increase");
-    k.point = point_of(keys[i], i > 0);
-    k.rotation = rotation_of(keys[i]);
-    if (t.kind == ToolKind::grab && !grab_rotation && k.rotation && rotation_angle_deg(*k.rotation) > 1e-9) {
-      keys[i].child(keys[i].has("rotation") ? "rotation" : "quaternion")
-          .fail("a grab turns what it holds only for kind: vessel (the other models grab points, not frames)");
-    }
-    t.path.push_back(k);
-  }
-  t.start_s = f.has("start_s") ? f.child("start_s").non_negative() : t.path.front().t;
-  t.end_s = f.has("end_s") ? f.child("end_s").positive() : std::numeric_limits<double>::infinity();
-  if (!(t.end_s > t.start_s)) f.child("end_s").fail("must be after start_s");
-  if (f.has("snap_to_tissue")) t.snap_to_tissue = f.child("snap_to_tissue").boolean();
+  item.only(names);
+  if (kinds != 1) item.fail("each tool is exactly one of " + tool_type_names(":"));
+  ToolAction t;
+  t.type = type;
+  t.label = item.path() + " (" + type->name + ")";
+  type->parse(item, context, t);
   return t;
 }
 
@@ -296,7 +150,7 @@ std::string describe_scenario(const Scenario& s) {
   j["inputs"] = inputs;
   nlohmann::json instruments = nlohmann::json::array();  // files the run reads besides the stage outputs
   for (const auto& tool : s.tools) {
-    if (tool.kind == ToolKind::instrument) instruments.push_back(tool.instrument_mesh.string());
+    if (tool.type->record == ToolRecord::instrument) instruments.push_back(tool.instrument_mesh.string());
   }
   j["instruments"] = instruments;
   j["trajectory"] = s.trajectory.string();
@@ -414,24 +268,7 @@ static Scenario parse_fields(const std::string& text, const fs::path& file, cons
   }
   if (top.has("tools")) {
     for (const auto& item : top.child("tools").items()) {
-      s.tools.push_back(tool_of(item, base_dir, s.model == ModelKind::vessel));
-      if (s.model == ModelKind::vessel && (s.tools.back().kind == ToolKind::instrument || s.tools.back().kind == ToolKind::suture)) {
-        item.fail(std::string(to_string(s.tools.back().kind)) + " is not supported by kind: vessel (grab, clamp, force, probe and cut are)");
-      }
-      // FEM tools: grab (prescribed displacements), probe and instrument (contact, dynamic only), cut
-      // (elements separated, nodes split: linear tets only, fem/fem_cutting.h).
-      if (s.model == ModelKind::fem && s.tools.back().kind == ToolKind::suture) {
-        item.fail("suture runs on the spring models only (kind: spring_grid or explicit_springs); stitches for kind: fem "
-                  "are not implemented yet");
-      }
-      if (s.model == ModelKind::fem && s.fem_order != 1 && s.tools.back().kind == ToolKind::cut) {
-        item.fail("cut needs linear (4-node) tets; quadratic elements are not cut (elements: linear)");
-      }
-      if (s.model == ModelKind::fem && s.fem_solver != FemSolver::dynamic &&
-          (s.tools.back().kind == ToolKind::probe || s.tools.back().kind == ToolKind::instrument)) {
-        item.fail(std::string(to_string(s.tools.back().kind)) +
-                  " needs solver: dynamic (contact is part of the explicit dynamics only, not of the static or implicit solvers)");
-      }
+      s.tools.push_back(tool_of(item, ToolParseContext{s, base_dir}));
     }
   }
 
@@ -536,7 +373,7 @@ static Scenario parse_fields(const std::string& text, const fs::path& file, cons
       if (s.fem_solver != FemSolver::static_equilibrium) r.fail("only with solver: static (the region couples quasi-static solves)");
       if (s.fem_order != 1) r.fail("needs linear (4-node) tets (elements: linear)");
       bool acts = false;
-      for (const ToolAction& a : s.tools) acts = acts || a.kind == ToolKind::grab || a.kind == ToolKind::force;
+      for (const ToolAction& a : s.tools) acts = acts || a.acts() == ToolPrimitive::hold || a.acts() == ToolPrimitive::load;
       if (!acts) r.fail("needs a grab or force tool: the region grows around the nodes the tools hold or load");
     }
   }

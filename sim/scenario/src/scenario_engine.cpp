@@ -84,6 +84,7 @@ EngineOptions engine_options(const Scenario& s, const std::function<void(const s
   o.mass_damping = s.damping_per_s;
   o.gravity = s.gravity;
   o.threads = s.threads;
+  o.density = s.material.density;
   o.where = s.file.string();
   o.note = note;
   return o;
@@ -165,11 +166,20 @@ ScenarioEngine spring_engine(const Scenario& s, Backend backend, const std::func
   }
   if (backend == Backend::cuda) {
     for (const auto& t : s.tools) {
-      if (t.kind == ToolKind::suture) throw InputError(sfile, t.label, "sutures run on the cpu backend only; set backend: cpu");
-      if (t.kind == ToolKind::force) throw InputError(sfile, t.label, "force tools run on the cpu backend only; set backend: cpu");
-      if (t.kind == ToolKind::instrument) {
-        throw InputError(sfile, t.label, "instruments run on the cpu backend only for spring models (the contact kernel is "
-                                         "written for CUDA, its device launch is not yet); set backend: cpu");
+      switch (t.acts()) {
+        case ToolPrimitive::hold:
+        case ToolPrimitive::push_sphere:
+        case ToolPrimitive::separate:
+          break;
+        case ToolPrimitive::stitch:
+          throw InputError(sfile, t.label, "sutures run on the cpu backend only; set backend: cpu");
+        case ToolPrimitive::load:
+          throw InputError(sfile, t.label, "force tools run on the cpu backend only; set backend: cpu");
+        case ToolPrimitive::push_shape:
+          throw InputError(sfile, t.label, "instruments run on the cpu backend only for spring models (the contact kernel is "
+                                           "written for CUDA, its device launch is not yet); set backend: cpu");
+        case ToolPrimitive::remove:
+          throw InputError(sfile, t.label, std::string(t.kind()) + " runs on the cpu backend only for spring models; set backend: cpu");
       }
     }
   }

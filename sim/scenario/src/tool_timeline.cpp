@@ -99,13 +99,13 @@ ToolTimeline::ToolTimeline(const std::vector<ToolAction>& tools, const std::vect
       r.p.push_back(p);
       r.r.push_back(k.rotation ? *k.rotation : r.r.empty() ? kIdentityRotation : r.r.back());
     }
-    if (spec.kind == ToolKind::suture) {
+    if (spec.acts() == ToolPrimitive::stitch) {
       resolve_stitches(spec, rest, origin, where, tool.stitch_points, tool.stitch_fields);
       r.t = {spec.start_s};
       r.p = {tool.stitch_points.front()[0]};
       r.r = {kIdentityRotation};
     }
-    if (spec.kind == ToolKind::instrument) tool.instrument = load_instrument(spec.instrument_mesh, spec.instrument_spacing_mm, note);
+    if (spec.acts() == ToolPrimitive::push_shape) tool.instrument = load_instrument(spec.instrument_mesh, spec.instrument_spacing_mm, note);
     if (spec.snap_to_tissue) {
       // The nearest rest particle to the first keyframe (lowest id on ties): the whole path moves by the
       // difference, so the tool starts on tissue whatever the bounding box looks like.
@@ -148,7 +148,8 @@ void ToolTimeline::inputs(double t0, double t1, double min_sweep_mm, std::vector
     Tool& tool = tools_[i];
     const ToolAction& spec = tool.spec;
     ToolInput& in = out[i];
-    in.kind = spec.kind;
+    in.acts = spec.acts();
+    in.name = spec.kind();
     in.label = spec.label;
     in.radius_mm = spec.radius_mm;
     in.force_n = spec.force_n;
@@ -162,19 +163,24 @@ void ToolTimeline::inputs(double t0, double t1, double min_sweep_mm, std::vector
     in.orientation = tool.path.rotation_at(t1);
     in.end_s = spec.end_s;
     in.local_region_mm = spec.local_region_mm;
-    if (spec.kind == ToolKind::suture) {
+    in.removal_rate_mm3_s = spec.removal_rate_mm3_s;
+    if (spec.acts() == ToolPrimitive::stitch) {
       in.stitches = tool.stitch_points;
       in.stitch_fields = tool.stitch_fields;
       in.stitch_target_mm = spec.stitch_target_mm;
       in.stitch_stiffness_ratio = spec.stitch_stiffness_ratio;
     }
-    if (spec.kind == ToolKind::cut) sweeps(tool, t0, t1, min_sweep_mm, in.sweeps);
+    if (spec.acts() == ToolPrimitive::separate) sweeps(tool, t0, t1, min_sweep_mm, in.sweeps);
   }
 }
 
 size_t ToolTimeline::add_tool(const ToolAction& spec, const Vec3& origin, const std::string& where) {
-  if (spec.kind != ToolKind::grab && spec.kind != ToolKind::probe && spec.kind != ToolKind::cut) {
-    throw InputError(where, spec.label, std::string(to_string(spec.kind)) + " cannot be added while running (grab, probe and cut can)");
+  if (spec.type == nullptr || !spec.type->live) {
+    std::string live;
+    for (const ToolType* t : tool_types())
+      if (t->live) live += (live.empty() ? "" : ", ") + std::string(t->name);
+    throw InputError(where, spec.label, std::string(spec.type ? spec.kind() : "a tool without a type") +
+                                            " cannot be added while running (" + live + " can)");
   }
   if (spec.path.empty() || spec.snap_to_tissue) throw InputError(where, spec.label, "needs a first keyframe and no snap_to_tissue");
   if (!(spec.end_s > spec.start_s)) throw InputError(where, spec.label, "its window must end after it starts");

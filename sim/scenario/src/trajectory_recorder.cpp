@@ -45,22 +45,40 @@ TrajectoryRecorder::TrajectoryRecorder(const Scenario& s, const SimulationEngine
               {"springs_cut", "1", {}},               {"dt", "s", {}}};
   for (const auto& [name, units] : engine.extra_metrics()) metrics_.push_back({name, units, {}});
   for (size_t i = 0; i < timeline.size(); ++i) {
-    if (timeline.tool(i).kind == ToolKind::cut) {
-      ++blades_;
-    } else if (timeline.tool(i).kind == ToolKind::suture) {
-      stitches_ += timeline.stitch_points(i).size();
-    } else if (timeline.tool(i).kind == ToolKind::instrument) {
-      const Instrument& shape = *timeline.instrument(i);
-      TrajectoryInstrument ins;
-      ins.name = timeline.tool(i).instrument_mesh.string();
-      ins.vertices.assign(shape.mesh.vertices.begin(), shape.mesh.vertices.end());
-      ins.triangles = shape.mesh.faces;
-      traj_.instruments.push_back(std::move(ins));
-    } else {
-      traj_.sphere_kinds.push_back(to_string(timeline.tool(i).kind));
+    const ToolType& type = *timeline.tool(i).type;
+    switch (type.record) {
+      case ToolRecord::blade:
+        ++blades_;
+        break;
+      case ToolRecord::stitches:
+        stitches_ += timeline.stitch_points(i).size();
+        break;
+      case ToolRecord::instrument: {
+        const Instrument& shape = *timeline.instrument(i);
+        TrajectoryInstrument ins;
+        ins.name = timeline.tool(i).instrument_mesh.string();
+        ins.vertices.assign(shape.mesh.vertices.begin(), shape.mesh.vertices.end());
+        ins.triangles = shape.mesh.faces;
+        traj_.instruments.push_back(std::move(ins));
+        break;
+      }
+      case ToolRecord::sphere:
+        traj_.sphere_kinds.push_back(type.record_name);
+        break;
     }
+    // A run with a tool that removes tissue records how much (the only runs that have the metric).
+    removal_ = removal_ || type.acts == ToolPrimitive::remove;
   }
+  if (removal_) metrics_.push_back({"removed_volume", "mm^3", {}});
 }
+
+namespace {
+
+// A sphere that holds or loads what it captured shows while it holds something; the others (a probe,
+// a cautery's tip) while their window is open.
+bool sphere_shows_engagement(const ToolType& type) { return type.acts == ToolPrimitive::hold || type.acts == ToolPrimitive::load; }
+
+}  // namespace
 
 void TrajectoryRecorder::record(SimulationEngine& engine, const ToolTimeline& timeline, double t) {
   engine.surface_vertices(vertices_);
@@ -109,28 +127,29 @@ void TrajectoryRecorder::record(SimulationEngine& engine, const ToolTimeline& ti
                            surface ? surface_area(vertices_, triangles) : 0.0,
                            static_cast<double>(m.springs_cut),
                            engine.dt()};
-  if (std::size(values) + m.extra.size() != metrics_.size()) {
+  if (std::size(values) + m.extra.size() + (removal_ ? 1 : 0) != metrics_.size()) {
     throw RuntimeError("trajectory recorder: the engine gave " + std::to_string(m.extra.size()) + " extra metrics, it named " +
                        std::to_string(metrics_.size() - std::size(values)));
   }
   for (size_t k = 0; k < std::size(values); ++k) metrics_[k].values.push_back(values[k]);
   for (size_t k = 0; k < m.extra.size(); ++k) metrics_[std::size(values) + k].values.push_back(m.extra[k]);
+  if (removal_) metrics_.back().values.push_back(m.removed_volume);
   for (size_t i = 0; i < timeline.size(); ++i) {
     const ToolAction& tool = timeline.tool(i);
-    if (tool.kind == ToolKind::cut || tool.kind == ToolKind::suture) continue;
+    if (tool.type->record == ToolRecord::blade || tool.type->record == ToolRecord::stitches) continue;
     const Vec3 l = timeline.position(i, t), c{l[0] + origin_[0], l[1] + origin_[1], l[2] + origin_[2]};
-    if (tool.kind == ToolKind::instrument) {
+    if (tool.type->record == ToolRecord::instrument) {
       const Quaternion q = timeline.orientation(i, t);
       traj_.instrument_poses.insert(traj_.instrument_poses.end(),
                                     {timeline.active(i, t) ? 1.0 : 0.0, q[0], q[1], q[2], q[3], c[0], c[1], c[2]});
       continue;
     }
-    const bool on = timeline.active(i, t) && (tool.kind == ToolKind::probe || engine.engaged(i));
+    const bool on = timeline.active(i, t) && (!sphere_shows_engagement(*tool.type) || engine.engaged(i));
     traj_.spheres.insert(traj_.spheres.end(), {c[0], c[1], c[2], on ? tool.radius_mm : 0.0});
   }
   for (size_t i = 0; i < timeline.size(); ++i) {
     const ToolAction& tool = timeline.tool(i);
-    if (tool.kind != ToolKind::cut) continue;
+    if (tool.type->record != ToolRecord::blade) continue;
     const Vec3 l = timeline.position(i, t), c{l[0] + origin_[0], l[1] + origin_[1], l[2] + origin_[2]};
     const auto& e = tool.blade_edge_mm;
     traj_.blades.insert(traj_.blades.end(), {c[0] - e[0] / 2, c[1] - e[1] / 2, c[2] - e[2] / 2, c[0] + e[0] / 2,
@@ -138,7 +157,7 @@ void TrajectoryRecorder::record(SimulationEngine& engine, const ToolTimeline& ti
   }
   // Stitches: where the engine holds them once placed, else where the scenario puts them (not placed).
   for (size_t i = 0; i < timeline.size(); ++i) {
-    if (timeline.tool(i).kind != ToolKind::suture) continue;
+    if (timeline.tool(i).type->record != ToolRecord::stitches) continue;
     const std::vector<std::array<Vec3, 2>> placed = engine.stitches(i);
     const std::vector<std::array<Vec3, 2>>& given = timeline.stitch_points(i);
     const bool on = placed.size() == given.size();
@@ -171,8 +190,8 @@ void TrajectoryRecorder::add_tool(const ToolTimeline& timeline, size_t i) {
     throw RuntimeError("trajectory recorder: tool " + std::to_string(i) + " added out of order (next: " + std::to_string(tools_) + ")");
   }
   const ToolAction& tool = timeline.tool(i);
-  const bool blade = tool.kind == ToolKind::cut;
-  if (!blade && tool.kind != ToolKind::grab && tool.kind != ToolKind::probe) {
+  const bool blade = tool.type->record == ToolRecord::blade;
+  if (!blade && tool.type->record != ToolRecord::sphere) {
     throw RuntimeError("trajectory recorder: " + tool.label + " cannot be added while running");
   }
   const size_t frames = traj_.time.size(), width = blade ? 7 : 4, tools = blade ? blades_ : traj_.sphere_kinds.size();
@@ -197,7 +216,7 @@ void TrajectoryRecorder::add_tool(const ToolTimeline& timeline, size_t i) {
   if (blade) {
     ++blades_;
   } else {
-    traj_.sphere_kinds.push_back(to_string(tool.kind));
+    traj_.sphere_kinds.push_back(tool.type->record_name);
   }
 }
 

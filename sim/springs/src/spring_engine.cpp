@@ -1,6 +1,7 @@
 #include "ctsurg/sim/springs/spring_engine.h"
 
 #include "ctsurg/core/error.h"
+#include "ctsurg/sim/springs/particle_removal.h"
 #include "spring_stepper.h"
 
 #include <algorithm>
@@ -172,7 +173,7 @@ void SpringEngine::equilibrium(const std::vector<ToolInput>&, double) {
 void SpringEngine::release_ended_grabs(const std::vector<ToolInput>& tools) {
   for (size_t i = 0; i < tools.size() && i < holds_.size(); ++i) {
     Hold& h = holds_[i];
-    if (tools[i].kind == ToolKind::grab && h.grab && !tools[i].active) {
+    if (tools[i].acts == ToolPrimitive::hold && h.grab && !tools[i].active) {
       h.grab.reset();
       stepper_->release_grab(h.handle);
       h.released = true;
@@ -186,8 +187,8 @@ void SpringEngine::apply_tools(const std::vector<ToolInput>& tools) {
   for (size_t i = 0; i < tools.size(); ++i) {
     const ToolInput& tool = tools[i];
     Hold& h = holds_[i];
-    switch (tool.kind) {
-      case ToolKind::grab:
+    switch (tool.acts) {
+      case ToolPrimitive::hold:
         if (!h.grab && !h.released && tool.active) {
           h.grab = stepper_->capture({tool.centre, tool.radius_mm}, true, &h.handle);
           if (h.grab->particles.empty()) {
@@ -205,7 +206,7 @@ void SpringEngine::apply_tools(const std::vector<ToolInput>& tools) {
           tool_work_ = true;
         }
         break;
-      case ToolKind::force: {
+      case ToolPrimitive::load: {
         // An external force F shared by n free particles adds (F / n) / m dt^2 to each one's Verlet
         // update: applied after the step, as the papers apply the tools, it is the same update as a
         // force inside the step (x_next = ... + (f + F / n) / m dt^2).
@@ -241,27 +242,34 @@ void SpringEngine::apply_tools(const std::vector<ToolInput>& tools) {
         tool_work_ |= !h.loaded.empty();
         break;
       }
-      case ToolKind::probe:
+      case ToolPrimitive::push_sphere:
         if (tool.active) tool_work_ |= stepper_->probe({tool.centre, tool.radius_mm}) > 0;
         break;
-      case ToolKind::instrument:
+      case ToolPrimitive::push_shape:
         if (tool.active) {
           if (!tool.instrument) throw InputError(options_.where, tool.label, "the instrument has no shape");
           tool_work_ |= stepper_->push_out(instrument_view(*tool.instrument, tool.orientation, tool.centre)) > 0;
         }
         break;
-      case ToolKind::cut:
+      case ToolPrimitive::separate:
         for (const auto& [from, to] : tool.sweeps) {
           sweep_blade(tool, from, to);
           tool_work_ = true;
         }
         break;
-      case ToolKind::suture:
+      case ToolPrimitive::stitch:
         if (h.stitches.empty() && !h.released && tool.active) place_stitches(tool, h);
         if (!h.stitches.empty()) {
           apply_stitches(state_, h.stitches, h.schedule, time_, params_.dt);
           // While the knots tighten the stitches do work on the tissue; afterwards they are plain springs.
           tool_work_ |= time_ < h.schedule.end_s;
+        }
+        break;
+      case ToolPrimitive::remove:
+        if (tool.active) {
+          remove_tissue(tool, h);
+        } else {
+          h.removal_budget_mm3 = 0;  // the tip is off: nothing carries over to its next touch
         }
         break;
     }
@@ -337,6 +345,38 @@ std::vector<std::array<Vec3, 2>> SpringEngine::stitches(size_t tool) const {
   return out;
 }
 
+// Removes the tissue inside a remove tool's sphere (a cautery) at its rate: the budget grows by rate x dt
+// each step while the tip is on and is spent on the particles nearest its centre (particle_removal.h);
+// with nothing left in reach it does not build up. The surface over the removed particles is opened
+// and, with close_cuts, closed over the crater.
+void SpringEngine::remove_tissue(const ToolInput& tool, Hold& h) {
+  if (stepper_->on_device()) {
+    throw InputError(options_.where, tool.label, std::string(tool.name) + " runs on the cpu backend only; set backend: cpu");
+  }
+  if (!(options_.density > 0)) {
+    throw InputError(options_.where, tool.label, "the engine was built without the tissue's density (EngineOptions::density)");
+  }
+  h.removal_budget_mm3 += tool.removal_rate_mm3_s * params_.dt;
+  if (removed_.empty()) removed_.assign(static_cast<size_t>(state_.count()), 0);
+  const Sphere tip{tool.centre, tool.radius_mm};
+  const RemovalResult r = std::visit(
+      [&](auto& m) { return remove_particles_in_sphere(m, state_, removed_, tip, options_.density, &h.removal_budget_mm3); }, model_);
+  if (r.exhausted) h.removal_budget_mm3 = 0;
+  if (r.particles.empty()) return;
+  removed_volume_ += r.volume_mm3;
+  removed_particles_ += static_cast<int64_t>(r.particles.size());
+  springs_cut_ += r.springs;
+  tool_work_ = true;
+  if (!surface_.empty()) {
+    const int64_t opened = surface_.remove_tied_to(removed_);
+    triangles_removed_ += opened;
+    if (opened > 0) {
+      surface_.move(state_, rest_real_, vertices_, options_.threads);
+      surface_.close_cut_holes(vertices_);
+    }
+  }
+}
+
 // Cuts the springs and the surface crossing the quad the blade's edge swept from centre `from` to `to`.
 void SpringEngine::sweep_blade(const ToolInput& blade, const Vec3& from, const Vec3& to) {
   stepper_->to_host();
@@ -377,6 +417,7 @@ EngineMetrics SpringEngine::metrics() const {
   m.max_displacement = std::sqrt(max_disp);
   m.springs_cut = springs_cut_;
   m.triangles_removed = triangles_removed_;
+  m.removed_volume = removed_volume_;
   return m;
 }
 
@@ -395,7 +436,8 @@ bool SpringEngine::can_restart() const { return !stepper_->on_device(); }
 
 void SpringEngine::save_checkpoint() {
   if (!can_restart()) throw RuntimeError(options_.where + ": a spring model on a CUDA device does not restart");
-  checkpoint_ = Checkpoint{state_, model_, holds_, surface_, time_, steps_, springs_cut_, triangles_removed_};
+  checkpoint_ = Checkpoint{state_, model_, holds_, surface_, removed_, time_, steps_, springs_cut_, triangles_removed_,
+                           removed_particles_, removed_volume_};
 }
 
 void SpringEngine::restart_halved() {
@@ -409,6 +451,9 @@ void SpringEngine::restart_halved() {
   steps_ = c.steps;
   springs_cut_ = c.springs_cut;
   triangles_removed_ = c.triangles_removed;
+  removed_ = c.removed;
+  removed_particles_ = c.removed_particles;
+  removed_volume_ = c.removed_volume;
   // Verlet's previous positions are rescaled so that the velocities stay the same:
   // x_prev = x - (x - x_prev) / 2.
   for (int32_t i = 0; i < state_.count(); ++i) {

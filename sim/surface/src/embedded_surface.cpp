@@ -36,6 +36,30 @@ int64_t EmbeddedSurface::cut_triangles(const Triangle& blade, const std::vector<
   return removed;
 }
 
+int64_t EmbeddedSurface::remove_tied_to(const std::vector<uint8_t>& gone) {
+  const auto tied_to_gone = [&](uint32_t v) {
+    for (size_t k = 0; k < 8; ++k) {
+      const int32_t p = coupling_.particles[8 * static_cast<size_t>(v) + k];
+      if (p < 0 || !(coupling_.weights[8 * static_cast<size_t>(v) + k] > 0)) continue;
+      if (static_cast<size_t>(p) >= gone.size()) {
+        throw InputError("surface", "gone", "node " + std::to_string(p) + " is beyond the " + std::to_string(gone.size()) + " flags");
+      }
+      if (gone[static_cast<size_t>(p)]) return true;
+    }
+    return false;
+  };
+  size_t kept = 0;
+  for (size_t f = 0; f < cut_.size(); f += 3) {
+    if (tied_to_gone(cut_[f]) || tied_to_gone(cut_[f + 1]) || tied_to_gone(cut_[f + 2])) continue;
+    for (size_t c = 0; c < 3; ++c) cut_[kept + c] = cut_[f + c];
+    kept += 3;
+  }
+  const int64_t removed = static_cast<int64_t>(cut_.size() - kept) / 3;
+  cut_.resize(kept);
+  if (removed > 0) triangles_ = cut_;  // open until close_cut_holes() re-closes it
+  return removed;
+}
+
 void EmbeddedSurface::set_close_cuts(bool close) {
   close_cuts_ = close;
   if (!close) return;

@@ -78,8 +78,8 @@ void VesselEngine::apply_tools(const std::vector<ToolInput>& tools) {
   for (size_t i = 0; i < tools.size(); ++i) {
     const ToolInput& tool = tools[i];
     Hold& h = holds_[i];
-    switch (tool.kind) {
-      case ToolKind::grab: {
+    switch (tool.acts) {
+      case ToolPrimitive::hold: {
         if (h.atoms.empty() && !h.released && tool.active) {
           h.atoms = atoms_in_sphere(tool.centre, tool.radius_mm, true);
           if (h.atoms.empty()) {
@@ -125,7 +125,7 @@ void VesselEngine::apply_tools(const std::vector<ToolInput>& tools) {
         }
         break;
       }
-      case ToolKind::force: {
+      case ToolPrimitive::load: {
         if (h.atoms.empty() && !h.released && tool.active) {
           h.atoms = atoms_in_sphere(tool.centre, tool.radius_mm, true);
           if (h.atoms.empty()) {
@@ -144,14 +144,15 @@ void VesselEngine::apply_tools(const std::vector<ToolInput>& tools) {
           for (size_t c = 0; c < 3; ++c) d.force[3 * static_cast<size_t>(a) + c] += share * tool.force_n[c];
         break;
       }
-      case ToolKind::cut:
+      case ToolPrimitive::separate:
         topology |= cut(tool);
         break;
-      case ToolKind::probe:
+      case ToolPrimitive::push_sphere:
         break;  // after the step
-      case ToolKind::instrument:
-      case ToolKind::suture:
-        throw InputError(options_.where, tool.label, std::string(to_string(tool.kind)) +
+      case ToolPrimitive::push_shape:
+      case ToolPrimitive::stitch:
+      case ToolPrimitive::remove:
+        throw InputError(options_.where, tool.label, tool.name +
                                                          " is not supported by the vessel model (grab, clamp, force, probe and "
                                                          "cut are)");
     }
@@ -208,7 +209,7 @@ StabilityReport VesselEngine::step(const std::vector<ToolInput>& tools, int step
     apply_tools(tools);
     newton_ += dynamics_->step();
     for (const ToolInput& t : tools)
-      if (t.kind == ToolKind::probe && t.active) probe(t);
+      if (t.acts == ToolPrimitive::push_sphere && t.active) probe(t);
     time_ += dt();
     ++steps_;
   }

@@ -138,7 +138,7 @@ TEST(FemCutting, ManyRandomCutsKeepAValidMeshAndAreDeterministic) {
 
 ToolInput blade_across(double x0, const Vec3& from, const Vec3& to) {
   ToolInput b;
-  b.kind = ToolKind::cut;
+  b.acts = ToolPrimitive::separate;
   b.label = "tools[0] (cut)";
   b.active = true;
   b.blade_edge_mm = {0, 0, 20};

@@ -31,7 +31,7 @@ EmbeddedSurface top_surface() {
 
 ToolInput grab_end(const Vec3& centre) {
   ToolInput g;
-  g.kind = ToolKind::grab;
+  g.acts = ToolPrimitive::hold;
   g.label = "tools[0] (grab)";
   g.radius_mm = 1.01;
   g.active = true;
@@ -107,7 +107,7 @@ TEST(FemEngine, ToolsActOnTheFreeAxesOfPartlyHeldNodes) {
 
     FemEngine pushed = engine();
     ToolInput f;
-    f.kind = ToolKind::force;
+    f.acts = ToolPrimitive::load;
     f.label = "tools[0] (force)";
     f.radius_mm = 1.01;
     f.active = true;
@@ -204,7 +204,7 @@ TEST(FemEngine, DynamicGrabCapturesTheNodesWhereTheyAreNow) {
 TEST(FemEngine, WhatTheFemDoesNotTakeIsRefusedWithTheField) {
   FemEngine e = static_engine(FemLaw::linear, Backend::cpu);
   ToolInput blade;
-  blade.kind = ToolKind::cut;
+  blade.acts = ToolPrimitive::separate;
   blade.label = "tools[1] (cut)";
   {
     // Quadratic tets are not cut.
@@ -224,7 +224,7 @@ TEST(FemEngine, WhatTheFemDoesNotTakeIsRefusedWithTheField) {
     }
   }
   ToolInput probe = blade;
-  probe.kind = ToolKind::probe;
+  probe.acts = ToolPrimitive::push_sphere;
   probe.label = "tools[1] (probe)";
   EXPECT_THROW(e.equilibrium({probe}, 0.1), InputError);
   FemEngineOptions o;

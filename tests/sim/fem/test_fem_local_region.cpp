@@ -168,7 +168,7 @@ TEST(FemLocalRegion, ATinyLoadGivesTheLinearSolution) {
 
 ToolInput grab_at(const std::string& label, const Vec3& start, const Vec3& now, double start_s, bool active = true) {
   ToolInput g;
-  g.kind = ToolKind::grab;
+  g.acts = ToolPrimitive::hold;
   g.label = label;
   g.radius_mm = 2.1;
   g.active = active;

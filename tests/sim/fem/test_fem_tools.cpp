@@ -28,7 +28,7 @@ int32_t node_at(const FemModel& m, double x, double y, double z) {
 
 ToolInput grab_at(const Vec3& centre, double radius, bool active = true) {
   ToolInput t;
-  t.kind = ToolKind::grab;
+  t.acts = ToolPrimitive::hold;
   t.label = "tools[0] (grab)";
   t.radius_mm = radius;
   t.active = active;
@@ -137,7 +137,7 @@ TEST(FemTools, ForceIsSharedEquallyAndChangesOnlyWhenItStartsOrEnds) {
   FemToolHolds holds(m, fixed, "s.yaml");
   const std::vector<double> u(m.nodes.size(), 0.0);
   ToolInput f = grab_at({4, 1, 1}, 1.01);
-  f.kind = ToolKind::force;
+  f.acts = ToolPrimitive::load;
   f.label = "tools[0] (force)";
   f.force_n = {0, 0, 0.5};
   EXPECT_TRUE(holds.update_forces({f}, u, false));
@@ -169,7 +169,7 @@ TEST(FemTools, ForceActsOnTheFreeAxesOfAPartlyHeldNode) {
   fixed[static_cast<size_t>(roller)] = 4;  // z held
   FemToolHolds holds(m, fixed, "s.yaml");
   ToolInput f = grab_at({4, 1, 1}, 1.01);
-  f.kind = ToolKind::force;
+  f.acts = ToolPrimitive::load;
   f.label = "tools[0] (force)";
   f.force_n = {0.3, 0, 0.5};
   EXPECT_TRUE(holds.update_forces({f}, std::vector<double>(m.nodes.size(), 0.0), false));
@@ -201,7 +201,7 @@ TEST(FemTools, SphereOnEmptySpaceIsAnInputErrorNamingTheTool) {
     EXPECT_NE(e.problem().find("grabs no free node at t = 0.250000 s"), std::string::npos) << e.problem();
   }
   ToolInput f = grab_at({50, 50, 50}, 1);
-  f.kind = ToolKind::force;
+  f.acts = ToolPrimitive::load;
   EXPECT_THROW(holds.update_forces({f}, u, false), InputError);
 }
 

@@ -77,7 +77,7 @@ TEST(LiveSession, AGrabDraggedAcrossTheBarReplaysBitForBit) {
   LiveSession session = session_of(dir.path(), live_bar_text());
   EXPECT_EQ(session.frames(), 1);
   session.advance_events(7);  // some steps before the user acts
-  const int grab = session.begin_tool({ToolKind::grab, 2.5, {}, {42, -15, 35}});
+  const int grab = session.begin_tool({&tool_type("grab"), 2.5, {}, {42, -15, 35}});
   EXPECT_TRUE(session.tool_active(grab));
   // A drag: a move between most steps, two moves (the second wins) before some, none before others.
   for (int k = 1; k <= 80; ++k) {
@@ -116,7 +116,7 @@ TEST(LiveSession, ACutChangesTheTopologyAndReplaysBitForBit) {
   EXPECT_TRUE(first.flags & LiveFrame::triangles_follow);
   EXPECT_FALSE(live_frame_of(session, 1, session.topology_version()).flags & LiveFrame::triangles_follow);
   // A blade with a 20 mm edge along z, drawn along y through the bar at x = 27 mm.
-  const int blade = session.begin_tool({ToolKind::cut, 0, {0, 0, 20}, {27, -25, 35}});
+  const int blade = session.begin_tool({&tool_type("cut"), 0, {0, 0, 20}, {27, -25, 35}});
   for (int k = 1; k <= 40; ++k) {
     session.move_tool(blade, {27, -25 + 0.5 * k, 35});
     session.advance_events(2);
@@ -141,7 +141,7 @@ TEST(LiveSession, AProbePausesResumesResetsAndKeepsRealTime) {
   TempDir dir;
   ctsurg::sim::test::write_block_files(dir.path(), 16, 4, 4, 2.0);
   LiveSession session = session_of(dir.path(), live_bar_text());
-  const int probe = session.begin_tool({ToolKind::probe, 3, {}, {32, -15, 42.5}});
+  const int probe = session.begin_tool({&tool_type("probe"), 3, {}, {32, -15, 42.5}});
   for (int k = 1; k <= 30; ++k) {
     session.move_tool(probe, {32, -15, 42.5 - 0.1 * k});
     session.advance_events(4);
@@ -189,7 +189,7 @@ TEST(LiveSession, FemGrabsReplayBitForBitDynamicAndQuasiStatic) {
     ctsurg::sim::test::write_bar_tet_mesh(dir.path());
     LiveSession session = session_of(dir.path(), fem_text(solver));
     session.advance_events(2);  // dynamic: batched to the frames while no tool acts
-    const int grab = session.begin_tool({ToolKind::grab, 4.5, {}, {43, -15, 35}});
+    const int grab = session.begin_tool({&tool_type("grab"), 4.5, {}, {43, -15, 35}});
     for (int k = 1; k <= 12; ++k) {
       session.move_tool(grab, {43, -15, 35 + 0.25 * k});
       session.advance_events(solver == "static" ? 1 : 20);
@@ -212,7 +212,7 @@ TEST(LiveSession, AnFemCutBetweenBatchedStepsReplaysBitForBit) {
   LiveSession session = session_of(dir.path(), fem_text("dynamic"));
   session.advance_events(1);  // a batch to the first frame
   const uint64_t before = session.topology_version();
-  const int blade = session.begin_tool({ToolKind::cut, 0, {0, 0, 20}, {27.5, -25, 35}});
+  const int blade = session.begin_tool({&tool_type("cut"), 0, {0, 0, 20}, {27.5, -25, 35}});
   for (int k = 1; k <= 20; ++k) {
     session.move_tool(blade, {27.5, -25 + 1.0 * k, 35});
     session.advance_events(5);
@@ -228,7 +228,7 @@ TEST(LiveSession, AJumpThatMakesTheModelUnstableGoesBackToTheFrameBefore) {
   TempDir dir;
   ctsurg::sim::test::write_block_files(dir.path(), 16, 4, 4, 2.0);
   LiveSession session = session_of(dir.path(), live_bar_text());
-  const int grab = session.begin_tool({ToolKind::grab, 2.5, {}, {42, -15, 35}});
+  const int grab = session.begin_tool({&tool_type("grab"), 2.5, {}, {42, -15, 35}});
   for (int k = 1; k <= 20; ++k) {
     session.move_tool(grab, {42, -15 - 0.1 * k, 35});
     session.advance_events(5);
@@ -269,7 +269,7 @@ TEST(LiveSession, StepHalvingsWhileDraggingReplayBitForBit) {
   // A step far above the critical one (0.17 ms): the guard fires at the first frames and the session
   // restarts from the last frame with half the step, as ctsurg-sim does; events wait until it is back.
   LiveSession session = session_of(dir.path(), live_bar_text("  dt_s: 0.003\n  max_step_halvings: 6\n"));
-  const int grab = session.begin_tool({ToolKind::grab, 2.5, {}, {42, -15, 35}});
+  const int grab = session.begin_tool({&tool_type("grab"), 2.5, {}, {42, -15, 35}});
   bool restarted = false;
   for (int k = 1; k <= 150; ++k) {
     session.move_tool(grab, {42, -15 - 0.02 * k, 35});
@@ -290,7 +290,7 @@ TEST(LiveSession, AGrabOnEmptySpaceIsReportedAndDropped) {
   ctsurg::sim::test::write_block_files(dir.path(), 16, 4, 4, 2.0);
   LiveSession session = session_of(dir.path(), live_bar_text());
   session.advance_events(70);  // past the first frame
-  const int grab = session.begin_tool({ToolKind::grab, 2, {}, {42, -15, 60}});
+  const int grab = session.begin_tool({&tool_type("grab"), 2, {}, {42, -15, 60}});
   const LiveAdvance r = session.advance_events(10);
   EXPECT_TRUE(r.stopped);
   EXPECT_NE(session.stopped_message().find("grabs no free particle"), std::string::npos) << session.stopped_message();
@@ -313,11 +313,11 @@ TEST(LiveSession, BadToolsAreRefusedWithTheFieldNamed) {
       EXPECT_NE(std::string(e.what()).find(field), std::string::npos) << e.what();
     }
   };
-  refused({ToolKind::force, 2, {}, {30, -15, 35}}, "tool");
-  refused({ToolKind::grab, 0, {}, {30, -15, 35}}, "radius_mm");
-  refused({ToolKind::probe, 51, {}, {30, -15, 35}}, "radius_mm");
-  refused({ToolKind::cut, 0, {0, 0, 0}, {30, -15, 35}}, "blade_edge_mm");
-  refused({ToolKind::grab, 2, {}, {30, std::nan(""), 35}}, "position_mm");
+  refused({&tool_type("force"), 2, {}, {30, -15, 35}}, "tool");
+  refused({&tool_type("grab"), 0, {}, {30, -15, 35}}, "radius_mm");
+  refused({&tool_type("probe"), 51, {}, {30, -15, 35}}, "radius_mm");
+  refused({&tool_type("cut"), 0, {0, 0, 0}, {30, -15, 35}}, "blade_edge_mm");
+  refused({&tool_type("grab"), 2, {}, {30, std::nan(""), 35}}, "position_mm");
   EXPECT_THROW(session.move_tool(3, {30, -15, 35}), InputError);
   EXPECT_THROW(session.end_tool(-1), InputError);
   // Nothing recorded after the rest frame yet: nothing to save.

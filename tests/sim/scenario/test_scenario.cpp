@@ -11,6 +11,7 @@
 
 #include <cmath>
 #include <fstream>
+#include <set>
 
 namespace fs = std::filesystem;
 using ctsurg::sim::parse_scenario;
@@ -108,13 +109,13 @@ TEST(Scenario, FullScenarioParsesEveryField) {
   EXPECT_EQ(s.fixed[1].half_space.point[2], 10);
   EXPECT_EQ(s.fixed[2].label, 2);
   ASSERT_EQ(s.tools.size(), 2u);
-  EXPECT_EQ(s.tools[0].kind, ctsurg::sim::ToolKind::grab);
+  EXPECT_STREQ(s.tools[0].kind(), "grab");
   EXPECT_EQ(s.tools[0].radius_mm, 5);
   EXPECT_EQ(s.tools[0].end_s, 0.5);
   EXPECT_TRUE(s.tools[0].snap_to_tissue);
   ASSERT_EQ(s.tools[0].path.size(), 2u);
   EXPECT_EQ(s.tools[0].path[1].point.kind, ctsurg::sim::PointSpec::Kind::offset_mm);
-  EXPECT_EQ(s.tools[1].kind, ctsurg::sim::ToolKind::cut);
+  EXPECT_STREQ(s.tools[1].kind(), "cut");
   EXPECT_EQ(s.tools[1].start_s, 0.2);  // defaults to the first keyframe
   EXPECT_TRUE(std::isinf(s.tools[1].end_s));
   EXPECT_EQ(s.tools[1].blade_edge_mm[2], 20);
@@ -221,7 +222,7 @@ TEST(Scenario, InstrumentsTheirMeshesAndOrientations) {
                                 "f.yaml", "/b/s");
   ASSERT_EQ(s.tools.size(), 1u);
   const auto& t = s.tools[0];
-  EXPECT_EQ(t.kind, ctsurg::sim::ToolKind::instrument);
+  EXPECT_STREQ(t.kind(), "instrument");
   EXPECT_EQ(t.instrument_mesh, std::filesystem::path("/b/s/../instruments/probe_rod.stl"));
   EXPECT_EQ(t.instrument_spacing_mm, 0.25);
   ASSERT_EQ(t.path.size(), 3u);
@@ -441,7 +442,7 @@ time:)";
   const auto s = parse_scenario(text, "s.yaml", "/base");
   ASSERT_EQ(s.tools.size(), 3u);
   const auto& t = s.tools[2];
-  EXPECT_EQ(t.kind, ctsurg::sim::ToolKind::suture);
+  EXPECT_STREQ(t.kind(), "suture");
   EXPECT_EQ(t.label, "tools[2] (suture)");
   EXPECT_DOUBLE_EQ(t.start_s, 0.3);
   EXPECT_DOUBLE_EQ(t.end_s, 0.5);
@@ -485,4 +486,67 @@ time:)";
   EXPECT_NE(error_of(replaced(replaced(kFull, "kind: spring_grid", "kind: fem\n  tetmesh: t.h5\n  close_cuts: true"), "  coupling: nearest_particle\n", ""))
                 .find("model.close_cuts: only for the spring models"),
             std::string::npos);
+}
+
+TEST(Scenario, CauteryFieldsAndTheModelsThatCanRemoveTissue) {
+  const std::string cautery = R"(
+  - cautery:
+      radius_mm: 2.5
+      rate_mm3_per_s: 40
+      start_s: 0.2
+      end_s: 0.4
+      path:
+        - {t: 0.2, position_mm: [20, -15, 40]}
+        - {t: 0.4, offset_mm: [0, 0, 4]}
+time:)";
+  const std::string text = replaced(kFull, "\ntime:", cautery);
+  const auto s = parse_scenario(text, "s.yaml", "/base");
+  ASSERT_EQ(s.tools.size(), 3u);
+  const auto& t = s.tools[2];
+  EXPECT_STREQ(t.kind(), "cautery");
+  EXPECT_EQ(t.acts(), ctsurg::sim::ToolPrimitive::remove);
+  EXPECT_EQ(t.label, "tools[2] (cautery)");
+  EXPECT_DOUBLE_EQ(t.radius_mm, 2.5);
+  EXPECT_DOUBLE_EQ(t.removal_rate_mm3_s, 40);
+  ASSERT_EQ(t.path.size(), 2u);
+  struct Case {
+    std::string from, to, expected;
+  };
+  const Case cases[] = {
+      {"rate_mm3_per_s: 40", "rate_mm3_per_s: 0", "s.yaml: tools[2].cautery.rate_mm3_per_s: must be > 0"},
+      {"rate_mm3_per_s: 40", "rate_mm3_per_s: 1e9", "tools[2].cautery.rate_mm3_per_s: must be at most"},
+      {"      rate_mm3_per_s: 40\n", "", "s.yaml: tools[2].cautery.rate_mm3_per_s: missing"},
+      {"rate_mm3_per_s: 40", "rate_mm3_per_s: 40\n      force_n: [0, 0, 1]", "tools[2].cautery.force_n: unknown key"},
+      // Only the spring models remove tissue: the FEM is refused, naming the tool.
+      {"kind: spring_grid", "kind: fem\n  tetmesh: t.h5",
+       "tools[2]: cautery removes tissue from the spring models only (kind: spring_grid or explicit_springs); kind: fem cannot"},
+      // An unknown tool names every tool there is.
+      {"  - cautery:", "  - laser:", "tools[2].laser: unknown key (known here: cautery, clamp, cut, force, grab, instrument, probe, suture)"},
+  };
+  for (const auto& c : cases) {
+    const std::string e = error_of(replaced(text, c.from, c.to));
+    EXPECT_NE(e.find(c.expected), std::string::npos) << "for " << c.to << "\n got: " << e;
+  }
+}
+
+TEST(Scenario, EveryRegisteredToolHasAParserAndAName) {
+  // The registry (tool_type.h) is the only list of tools: each has a unique scenario key, a parser, and
+  // a record name for the spheres the trajectory draws.
+  std::set<std::string> names;
+  for (const ctsurg::sim::ToolType* t : ctsurg::sim::tool_types()) {
+    ASSERT_NE(t, nullptr);
+    EXPECT_NE(t->parse, nullptr) << t->name;
+    EXPECT_TRUE(names.insert(t->name).second) << "two tools named " << t->name;
+    EXPECT_EQ(ctsurg::sim::find_tool_type(t->name), t);
+    if (t->record == ctsurg::sim::ToolRecord::sphere) {
+      EXPECT_STRNE(t->record_name, "") << t->name;
+    }
+  }
+  EXPECT_EQ(ctsurg::sim::find_tool_type("laser"), nullptr);
+  try {
+    (void)ctsurg::sim::tool_type("laser", "live session", "tool");
+    ADD_FAILURE() << "an unknown tool was accepted";
+  } catch (const ctsurg::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("unknown tool 'laser' (the tools are grab, clamp, probe"), std::string::npos) << e.what();
+  }
 }

@@ -109,7 +109,7 @@ TEST(ScenarioGpu, WhatTheDeviceCannotRunIsRefused) {
   write_block(dir.path());
   auto s = parse_scenario(std::string(kScenario) + "backend: cuda\n", dir.path() / "s.yaml", dir.path());
   ToolAction force = s.tools[0];
-  force.kind = ToolKind::force;
+  force.type = &tool_type("force");
   force.force_n = {0, 0, 0.01};
   force.label = "tools[3] (force)";
   s.tools.push_back(force);

@@ -87,7 +87,8 @@ TEST(ScenarioVessel, AClampHoldsWhileABladeCutsTheVesselInTwo) {
       "  - cut:\n      blade_edge_mm: [0, 0, 6]\n      start_s: 0.1\n      end_s: 0.2\n      path:\n"
       "        - {t: 0.1, position_mm: [120.5, -55, 20]}\n        - {t: 0.2, position_mm: [120.5, -45, 20]}\n";
   const Scenario s = parse_scenario(vessel_scenario(tools), dir.path() / "s.yaml", dir.path());
-  ASSERT_EQ(s.tools[0].kind, ToolKind::grab);
+  ASSERT_STREQ(s.tools[0].kind(), "clamp");
+  EXPECT_EQ(s.tools[0].acts(), ToolPrimitive::hold);  // a grab that stays where it is put
   EXPECT_EQ(s.tools[0].path.size(), 1u);
   EXPECT_EQ(s.tools[0].label, "tools[0] (clamp)");
   RunReport report;
@@ -134,7 +135,7 @@ TEST(ScenarioVessel, Refusals) {
       "tools:\n  - clamp: {radius_mm: 2, at_fraction: [0.5, 0.5, 0.5], start_s: 0.1, end_s: 0.3}\n"
       "time:\n  duration_s: 0.5\noutput:\n  trajectory: out.h5\n",
       dir.path() / "s.yaml", dir.path());
-  EXPECT_EQ(clamp.tools[0].kind, ToolKind::grab);
+  EXPECT_STREQ(clamp.tools[0].kind(), "clamp");
   EXPECT_EQ(clamp.tools[0].start_s, 0.1);
   EXPECT_EQ(clamp.tools[0].path[0].t, 0.1);
   // A model section's fields of other models.

@@ -26,10 +26,10 @@ std::vector<double> box_corners() {
 
 Keyframe key(double t, PointSpec::Kind kind, const Vec3& v) { return {t, {kind, v}, std::nullopt}; }
 
-ToolAction tool(ToolKind kind, std::vector<Keyframe> path, double start, double end) {
+ToolAction tool(const char* kind, std::vector<Keyframe> path, double start, double end) {
   ToolAction a;
-  a.kind = kind;
-  a.label = std::string("tools[0] (") + to_string(kind) + ")";
+  a.type = &tool_type(kind);
+  a.label = std::string("tools[0] (") + kind + ")";
   a.radius_mm = 2;
   a.path = std::move(path);
   a.start_s = start;
@@ -42,7 +42,7 @@ void expect_near(const Vec3& a, const Vec3& b) {
 }
 
 TEST(ToolTimeline, KeyframesBecomePointsOfTheRunsFrameAndTheToolMovesLinearly) {
-  const std::vector<ToolAction> tools{tool(ToolKind::grab,
+  const std::vector<ToolAction> tools{tool("grab",
                                            {key(0.1, PointSpec::Kind::position_mm, {105, 210, 330}),
                                             key(0.3, PointSpec::Kind::offset_mm, {0, 0, 4}),
                                             key(0.5, PointSpec::Kind::at_fraction, {1, 0.5, 0})},
@@ -58,7 +58,7 @@ TEST(ToolTimeline, KeyframesBecomePointsOfTheRunsFrameAndTheToolMovesLinearly) {
 }
 
 TEST(ToolTimeline, SnapMovesThePathOntoTheNearestRestParticle) {
-  ToolAction a = tool(ToolKind::grab, {key(0, PointSpec::Kind::at_fraction, {0.9, 0.1, 0.8}),
+  ToolAction a = tool("grab", {key(0, PointSpec::Kind::at_fraction, {0.9, 0.1, 0.8}),
                                        key(1, PointSpec::Kind::offset_mm, {0, 5, 0})}, 0, 1);
   a.snap_to_tissue = true;
   std::vector<std::string> notes;
@@ -70,7 +70,7 @@ TEST(ToolTimeline, SnapMovesThePathOntoTheNearestRestParticle) {
 }
 
 TEST(ToolTimeline, WindowsAndIdleIntervals) {
-  const std::vector<ToolAction> tools{tool(ToolKind::probe, {key(0, PointSpec::Kind::position_mm, {0, 0, 0})}, 0.2, 0.4)};
+  const std::vector<ToolAction> tools{tool("probe", {key(0, PointSpec::Kind::position_mm, {0, 0, 0})}, 0.2, 0.4)};
   const ToolTimeline t(tools, box_corners(), {0, 0, 0});
   EXPECT_FALSE(t.active(0, 0.19));
   EXPECT_TRUE(t.active(0, 0.2 - 1e-13));  // a step landing on start_s in floating point starts it
@@ -84,7 +84,7 @@ TEST(ToolTimeline, WindowsAndIdleIntervals) {
   ToolTimeline copy = t;
   copy.inputs(0.25, 0.3, 0.1, in);
   ASSERT_EQ(in.size(), 1u);
-  EXPECT_EQ(in[0].kind, ToolKind::probe);
+  EXPECT_EQ(in[0].acts, ToolPrimitive::push_sphere);
   EXPECT_EQ(in[0].label, "tools[0] (probe)");
   EXPECT_TRUE(in[0].active);
   EXPECT_EQ(in[0].start_s, 0.2);
@@ -95,7 +95,7 @@ TEST(ToolTimeline, WindowsAndIdleIntervals) {
 TEST(ToolTimeline, BladeSweepsOnStraightStretchesOnceItMovedFarEnough) {
   // From (0, 0, 0) to (8, 0, 0) by t = 0.5 s (16 mm/s), then to (8, 4, 0) by 1 s (8 mm/s); active
   // 0.125 .. 0.875 s; steps of 3/32 s (every time here is exact in binary), shortest sweep 2.5 mm.
-  ToolAction blade = tool(ToolKind::cut,
+  ToolAction blade = tool("cut",
                           {key(0.0, PointSpec::Kind::position_mm, {0, 0, 0}), key(0.5, PointSpec::Kind::position_mm, {8, 0, 0}),
                            key(1.0, PointSpec::Kind::position_mm, {8, 4, 0})},
                           0.125, 0.875);
@@ -128,7 +128,7 @@ TEST(ToolTimeline, BladeSweepsOnStraightStretchesOnceItMovedFarEnough) {
 TEST(ToolTimeline, AnInstrumentTurnsBySlerpAndCarriesItsShape) {
   // Keys at 0 (no rotation given: the identity), 1 s (90 degrees about z) and 2 s (none: held): the
   // inputs carry the loaded instrument and the rotation slerped on the same time fraction as the path.
-  ToolAction a = tool(ToolKind::instrument,
+  ToolAction a = tool("instrument",
                       {key(0, PointSpec::Kind::position_mm, {0, 0, 0}), key(1, PointSpec::Kind::offset_mm, {10, 0, 0}),
                        key(2, PointSpec::Kind::offset_mm, {10, 0, 0})},
                       0, 3);

@@ -31,7 +31,7 @@ SpringEngine bar_engine() {
 
 ToolInput instrument_tool(const std::shared_ptr<const Instrument>& ins, const Vec3& centre, const Quaternion& q) {
   ToolInput t;
-  t.kind = ToolKind::instrument;
+  t.acts = ToolPrimitive::push_shape;
   t.label = "tools[0] (instrument)";
   t.active = true;
   t.centre = centre;
@@ -49,7 +49,7 @@ TEST(InstrumentContact, ASphereMeshActsAsTheSphereProbe) {
   SpringEngine a = bar_engine(), b = bar_engine();
   const Vec3 c{24, -16, 37.5};
   ToolInput probe;
-  probe.kind = ToolKind::probe;
+  probe.acts = ToolPrimitive::push_sphere;
   probe.label = "tools[0] (probe)";
   probe.radius_mm = 3;
   probe.active = true;

@@ -42,10 +42,11 @@ SpringEngine engine(bool surface = true, std::vector<std::string>* notes = nullp
   return SpringEngine(std::move(b.model), std::move(state), std::move(s), {0, 0, 0}, o);
 }
 
-ToolInput sphere_tool(ToolKind kind, const Vec3& centre, double radius, bool active = true) {
+ToolInput sphere_tool(ToolPrimitive kind, const Vec3& centre, double radius, bool active = true) {
   ToolInput t;
-  t.kind = kind;
-  t.label = std::string("tools[0] (") + to_string(kind) + ")";
+  t.acts = kind;
+  t.name = kind == ToolPrimitive::hold ? "grab" : kind == ToolPrimitive::load ? "force" : "probe";
+  t.label = "tools[0] (" + t.name + ")";
   t.radius_mm = radius;
   t.active = active;
   t.centre = centre;
@@ -74,7 +75,7 @@ TEST(SpringEngine, GrabCarriesItsParticlesAndLetsGoForGood) {
   SpringEngine e = engine(true, &notes);
   const auto& model = std::get<SpringGridModel>(e.model());
   const int32_t tip = model.particle_at(10, 2, 2);  // the free end's centre, x = 30 mm
-  std::vector<ToolInput> tools{sphere_tool(ToolKind::grab, {30, -16, 34}, 1.5)};
+  std::vector<ToolInput> tools{sphere_tool(ToolPrimitive::hold, {30, -16, 34}, 1.5)};
   ASSERT_TRUE(e.step(tools, 1).stable);
   EXPECT_TRUE(e.engaged(0));
   ASSERT_EQ(notes.size(), 1u);
@@ -92,7 +93,7 @@ TEST(SpringEngine, GrabCarriesItsParticlesAndLetsGoForGood) {
   // A grab on empty space names the tool and the place.
   SpringEngine fresh = engine();
   try {
-    (void)fresh.step({sphere_tool(ToolKind::grab, {100, 100, 100}, 1.0)}, 1);
+    (void)fresh.step({sphere_tool(ToolPrimitive::hold, {100, 100, 100}, 1.0)}, 1);
     ADD_FAILURE() << "a grab on empty space was accepted";
   } catch (const InputError& err) {
     EXPECT_EQ(err.file(), "s.yaml");
@@ -109,7 +110,7 @@ TEST(SpringEngine, AGrabLeavesFixedParticlesWhereTheyAre) {
   const auto& model = std::get<SpringGridModel>(e.model());
   const int32_t fixed = model.particle_at(1, 2, 2), free = model.particle_at(2, 2, 2);  // x = 12 (fixed), 14 mm
   const float fixed_z = e.state().z[static_cast<size_t>(fixed)];
-  std::vector<ToolInput> tools{sphere_tool(ToolKind::grab, {13, -16, 34}, 1.2)};  // holds both
+  std::vector<ToolInput> tools{sphere_tool(ToolPrimitive::hold, {13, -16, 34}, 1.2)};  // holds both
   ASSERT_TRUE(e.step(tools, 1).stable);
   ASSERT_EQ(notes.size(), 1u);
   EXPECT_NE(notes[0].find("grabbed 1 particles"), std::string::npos) << notes[0];
@@ -119,7 +120,7 @@ TEST(SpringEngine, AGrabLeavesFixedParticlesWhereTheyAre) {
   EXPECT_FLOAT_EQ(e.state().z[static_cast<size_t>(free)], 37.f);
   SpringEngine fresh = engine();
   try {
-    (void)fresh.step({sphere_tool(ToolKind::grab, {12, -16, 34}, 1.0)}, 1);  // only the fixed particle
+    (void)fresh.step({sphere_tool(ToolPrimitive::hold, {12, -16, 34}, 1.0)}, 1);  // only the fixed particle
     ADD_FAILURE() << "a grab holding only fixed particles was accepted";
   } catch (const InputError& err) {
     EXPECT_EQ(err.field(), "tools[0] (grab)");
@@ -131,7 +132,7 @@ TEST(SpringEngine, BladeSweepsCutTheSpringsAndTheSurface) {
   SpringEngine e = engine();
   const size_t triangles = e.triangles().size();
   ToolInput blade;
-  blade.kind = ToolKind::cut;
+  blade.acts = ToolPrimitive::separate;
   blade.label = "tools[0] (cut)";
   blade.blade_edge_mm = {0, 0, 40};
   blade.active = true;
@@ -151,10 +152,10 @@ TEST(SpringEngine, ProbePushesAndForceSpreadsOverTheFreeParticles) {
   SpringEngine e = engine(false);
   const auto& model = std::get<SpringGridModel>(e.model());
   const int32_t top = model.particle_at(6, 2, 3);  // x = 22, y = -16, z = 36 (the top row)
-  ASSERT_TRUE(e.step({sphere_tool(ToolKind::probe, {22, -16, 37}, 2.0)}, 1).stable);
+  ASSERT_TRUE(e.step({sphere_tool(ToolPrimitive::push_sphere, {22, -16, 37}, 2.0)}, 1).stable);
   EXPECT_NEAR(e.state().z[static_cast<size_t>(top)], 35.0, 1e-4);  // pushed to the sphere's surface
   SpringEngine f = engine(false);
-  ToolInput force = sphere_tool(ToolKind::force, {30, -16, 34}, 2.1);
+  ToolInput force = sphere_tool(ToolPrimitive::load, {30, -16, 34}, 2.1);
   force.force_n = {0, 0, 1e-3};  // 1 mN up, over the 6 free particles within 2.1 mm of the end's centre
   ASSERT_TRUE(f.step({force}, 1).stable);
   EXPECT_TRUE(f.engaged(0));
@@ -170,7 +171,7 @@ TEST(SpringEngine, ProbePushesAndForceSpreadsOverTheFreeParticles) {
 TEST(SpringEngine, RestartGoesBackToTheCheckpointWithHalfTheStep) {
   SpringEngine e = engine();
   ASSERT_TRUE(e.can_restart());
-  std::vector<ToolInput> tools{sphere_tool(ToolKind::grab, {30, -16, 34}, 1.5)};
+  std::vector<ToolInput> tools{sphere_tool(ToolPrimitive::hold, {30, -16, 34}, 1.5)};
   ASSERT_TRUE(e.step(tools, 5).stable);
   e.save_checkpoint();
   const ParticleState saved = e.state();

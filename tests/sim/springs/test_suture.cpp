@@ -53,7 +53,7 @@ SpringEngine block_engine() {
 // Cuts the block through at x = 19 (between the cell centres 18 and 20).
 void cut_through(SpringEngine& e) {
   ToolInput blade;
-  blade.kind = ToolKind::cut;
+  blade.acts = ToolPrimitive::separate;
   blade.label = "tools[0] (cut)";
   blade.blade_edge_mm = {0, 0, 40};
   blade.active = true;
@@ -78,7 +78,7 @@ double gap(const SpringEngine& e) {
 
 ToolInput suture(double start, double end, double target) {
   ToolInput t;
-  t.kind = ToolKind::suture;
+  t.acts = ToolPrimitive::stitch;
   t.label = "tools[1] (suture)";
   t.start_s = start;
   t.end_s = end;

@@ -29,7 +29,7 @@ std::unique_ptr<VesselEngine> vessel(VesselEngineOptions o = {}) {
 
 ToolInput grab_at(const Vec3& centre, double radius) {
   ToolInput t;
-  t.kind = ToolKind::grab;
+  t.acts = ToolPrimitive::hold;
   t.label = "tools[0] (grab)";
   t.radius_mm = radius;
   t.active = true;
@@ -91,7 +91,7 @@ TEST(VesselEngine, ABladeCutsTheChainInTwoAndCapsTheEnds) {
   auto e = vessel(o);
   const size_t before = e->triangles().size();
   ToolInput blade;
-  blade.kind = ToolKind::cut;
+  blade.acts = ToolPrimitive::separate;
   blade.label = "tools[0] (cut)";
   blade.active = true;
   blade.blade_edge_mm = {0, 0, 8};
@@ -114,7 +114,7 @@ TEST(VesselEngine, ABladeCutsTheChainInTwoAndCapsTheEnds) {
 TEST(VesselEngine, ForceBendsAndRefusals) {
   auto e = vessel();
   ToolInput f;
-  f.kind = ToolKind::force;
+  f.acts = ToolPrimitive::load;
   f.label = "tools[0] (force)";
   f.radius_mm = 0.5;
   f.active = true;
@@ -134,7 +134,7 @@ TEST(VesselEngine, ForceBendsAndRefusals) {
     EXPECT_NE(std::string(err.what()).find("captures no atom"), std::string::npos) << err.what();
   }
   ToolInput ins;
-  ins.kind = ToolKind::instrument;
+  ins.acts = ToolPrimitive::push_shape;
   ins.label = "tools[1] (instrument)";
   EXPECT_THROW(vessel()->step({ins}, 1), ctsurg::InputError);
   VesselWall w;

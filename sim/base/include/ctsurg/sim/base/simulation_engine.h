@@ -7,14 +7,22 @@
 //
 // Tools. A time step (step()) or a quasi-static frame (equilibrium()) takes the tools as they are at
 // its end, as one ToolInput per tool in a fixed order: the index names the tool to the engine, which
-// keeps what the tool holds. A grab captures what is inside its sphere when it first becomes active
-// and moves it with its centre until it stops being active (then it lets go, for good); a probe pushes
-// the model out of its sphere while active; a force spreads its total force over what is inside its
-// sphere when it starts, until it ends; an instrument (a rigid closed mesh at a position and an
-// orientation) pushes the model out of itself while active; a suture joins pairs of points with stitches
-// placed when it starts, tightened over its window and kept after it (springs/suture.h); a blade cuts what its edge crossed along the straight
-// segments its centre swept since its last sweep (the caller decides when a blade sweeps:
-// blade_sweep_mm()).
+// keeps what the tool holds. An engine never knows which tool it is given (grab, clamp, cautery...: the
+// scenario's plug-ins, scenario/tool_type.h); it knows the primitive the tool acts through
+// (ToolPrimitive), and a new tool that acts through the existing primitives touches no engine:
+//   hold        captures what is inside its sphere when it first becomes active and moves it with its
+//               centre until it stops being active (then it lets go, for good): grab, clamp;
+//   load        spreads a total force over what is inside its sphere when it starts, until it ends: force;
+//   push_sphere pushes the model out of its sphere while active: probe;
+//   push_shape  pushes the model out of a rigid closed mesh at a position and an orientation: instrument;
+//   separate    cuts what its edge crossed along the straight segments its centre swept since its last
+//               sweep (the caller decides when a blade sweeps: blade_sweep_mm()): cut;
+//   stitch      joins pairs of points with stitches placed when it starts, tightened over its window and
+//               kept after it (springs/suture.h): suture;
+//   remove      removes the tissue inside its sphere while active, at most removal_rate_mm3_s of it per
+//               second, nearest its centre first; the surface is closed over the crater and the volume
+//               removed is counted (EngineMetrics::removed_volume): cautery.
+// An engine that cannot act through a primitive says so (InputError naming the tool) when given one.
 //
 // Frame. Every position an engine takes or gives is in its local frame: LPS minus origin(), in mm (a
 // whole-millimetre point near the model, so that float positions keep their resolution far from the
@@ -44,32 +52,36 @@ namespace ctsurg::sim {
 
 using Vec3 = std::array<double, 3>;
 
-enum class ToolKind { grab, probe, cut, force, instrument, suture };
-const char* to_string(ToolKind kind);
+// How a tool acts on a model (above). -Werror=switch makes every engine's switch name each one.
+enum class ToolPrimitive { hold, load, push_sphere, push_shape, separate, stitch, remove };
+const char* to_string(ToolPrimitive primitive);
 
-// One tool at the end of a step (or at a quasi-static frame's time).
+// One tool at the end of a step (or at a quasi-static frame's time). The fields a primitive does not
+// name are unused.
 struct ToolInput {
-  ToolKind kind = ToolKind::grab;
+  ToolPrimitive acts = ToolPrimitive::hold;
+  std::string name;                    // the tool's kind as the scenario names it ("grab", "cautery"), for messages
   std::string label;                   // names the tool in messages, e.g. "tools[0] (grab)"
-  double radius_mm = 0;                // grab, probe, force: the sphere's radius, mm
-  Vec3 force_n{0, 0, 0};               // force: the total force, N (LPS)
-  Vec3 blade_edge_mm{0, 0, 0};         // cut: the blade's edge, centred on its path, mm
+  double radius_mm = 0;                // hold, load, push_sphere, remove: the sphere's radius, mm
+  Vec3 force_n{0, 0, 0};               // load: the total force, N (LPS)
+  Vec3 blade_edge_mm{0, 0, 0};         // separate: the blade's edge, centred on its path, mm
+  double removal_rate_mm3_s = 0;       // remove: the most tissue it removes per second, mm^3/s (> 0)
   bool active = false;                 // inside its time window
   Vec3 centre{0, 0, 0};                // mm, local frame
   double start_s = 0;                  // when its window opens, s, and where it is then (mm): a
   Vec3 start_centre{0, 0, 0};          //   quasi-static engine captures there
-  std::vector<std::array<Vec3, 2>> sweeps;  // cut: straight segments (from, to) its centre swept
+  std::vector<std::array<Vec3, 2>> sweeps;  // separate: straight segments (from, to) its centre swept
                                             //   since its last sweep, in order; empty: no cut now
-  std::shared_ptr<const Instrument> instrument;  // instrument: its shape (base/instrument.h)
-  Quaternion orientation = kIdentityRotation;    // instrument: its rotation now (its frame -> the run's)
+  std::shared_ptr<const Instrument> instrument;  // push_shape: its shape (base/instrument.h)
+  Quaternion orientation = kIdentityRotation;    // push_shape: its rotation now (its frame -> the run's)
   double end_s = 0;                              // when its window closes, s (+inf: the end of the run)
-  // suture: each stitch's two points (mm, local frame), joined when the window opens; its rest length
+  // stitch: each stitch's two points (mm, local frame), joined when the window opens; its rest length
   // goes to stitch_target_mm by end_s and stays there. stitch_fields names each stitch in messages.
   std::vector<std::array<Vec3, 2>> stitches;
   std::vector<std::string> stitch_fields;
   double stitch_target_mm = 0;                   // mm, >= 0
   double stitch_stiffness_ratio = 1;             // x the model's stiffest spring (> 0)
-  double local_region_mm = 0;  // grab, force on an FEM local region (fem_local_region.h): this tool's region
+  double local_region_mm = 0;  // hold, load on an FEM local region (fem_local_region.h): this tool's region
                                // radius, mm; 0: the engine's
 };
 
@@ -81,6 +93,7 @@ struct EngineOptions {
   double stiffness_damping = 0;            // stiffness-proportional (Rayleigh) damping, s (>= 0; implicit FEM)
   std::array<double, 3> gravity{0, 0, 0};  // mm/s^2, LPS
   int threads = 0;                         // CPU threads, 0 = automatic
+  double density = 0;                      // g/mm^3, the tissue's: the remove primitive counts volume as mass / density
   std::string where = "engine";            // names the run in messages (a scenario file)
   std::function<void(const std::string&)> note;  // what the engine decides (captures...), for a log; may be empty
 };
@@ -102,6 +115,7 @@ struct EngineMetrics {
   double max_displacement = 0;   // mm, over the nodes
   int64_t springs_cut = 0;       // cumulative
   int64_t triangles_removed = 0; // surface triangles the blade removed, cumulative
+  double removed_volume = 0;     // mm^3 of tissue the remove primitive took away (cautery), cumulative
   std::vector<double> extra;     // the values of extra_metrics(), in its order
 };
 
@@ -143,10 +157,10 @@ class SimulationEngine {
   virtual int64_t closing_triangles() const { return 0; }
   virtual const std::vector<Real>& surface_rest_vertices() const = 0;  // #V x 3 mm, local; empty: none
   virtual EngineMetrics metrics() const = 0;
-  // Whether tool `tool` (an index into the tool list) holds something: a grab its capture, a force
+  // Whether tool `tool` (an index into the tool list) holds something: a hold its capture, a load
   // the nodes it loads.
   virtual bool engaged(size_t tool) const = 0;
-  // A suture's stitches now (tool: an index into the tool list): each stitch's two points (mm, local
+  // A stitch tool's stitches now (tool: an index into the tool list): each stitch's two points (mm, local
   // frame; they move with the nodes they joined). Empty before the stitches are placed, and for an
   // engine without sutures.
   virtual std::vector<std::array<Vec3, 2>> stitches([[maybe_unused]] size_t tool) const { return {}; }

@@ -43,6 +43,7 @@
 #pragma once
 
 #include "ctsurg/sim/base/simulation_engine.h"
+#include "ctsurg/sim/scenario/tool_type.h"
 
 #include <array>
 #include <cstdint>
@@ -60,7 +61,7 @@ inline constexpr double kMaxLiveBladeMm = 200;      // a blade's edge length, mm
 struct LiveMessage {
   enum class Type { begin, move, end, pause, resume, reset, save };
   Type type = Type::pause;
-  ToolKind tool = ToolKind::grab;            // begin: grab, probe or cut
+  const ToolType* tool = nullptr;            // begin: a live tool (scenario/tool_type.h: grab, probe, cut)
   double radius_mm = 0;                      // begin grab/probe
   std::array<double, 3> blade_edge_mm{};     // begin cut
   std::array<double, 3> position_mm{};       // begin, move: LPS mm

@@ -60,7 +60,7 @@ namespace ctsurg::sim {
 // A tool the user begins: grab or probe (a sphere of radius_mm), or cut (a blade with edge
 // blade_edge_mm, centred on its position); at `position_mm` (LPS).
 struct LiveToolSpec {
-  ToolKind kind = ToolKind::grab;
+  const ToolType* kind = nullptr;        // a live tool (scenario/tool_type.h: ToolType::live)
   double radius_mm = 0;                  // grab, probe: (0, kMaxLiveToolRadiusMm]
   std::array<double, 3> blade_edge_mm{}; // cut: length in (0, kMaxLiveBladeMm]
   std::array<double, 3> position_mm{};   // LPS mm, finite

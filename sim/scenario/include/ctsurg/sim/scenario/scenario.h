@@ -13,6 +13,7 @@
 #include "ctsurg/sim/base/simulation_engine.h"
 #include "ctsurg/sim/fem/fem_engine.h"
 #include "ctsurg/sim/fem/fem_material.h"
+#include "ctsurg/sim/scenario/tool_type.h"
 #include "ctsurg/sim/fem/fem_static_solver.h"
 #include "ctsurg/sim/surface/surface_coupling.h"
 #include "ctsurg/sim/vessel/vessel_skinning.h"
@@ -66,7 +67,7 @@ struct SutureLine {
 };
 
 struct ToolAction {
-  ToolKind kind = ToolKind::grab;    // base/simulation_engine.h
+  const ToolType* type = nullptr;    // what kind of tool (tool_type.h: its primitive, record, parser); set by the parser
   std::string label;                 // "tools[0] (grab)", for messages
   double start_s = 0;                // active from start_s ...
   double end_s = 0;                  // ... to end_s (grab: release), s; +inf = to the end of the run
@@ -89,6 +90,11 @@ struct ToolAction {
   double stitch_stiffness_ratio = 1;
   // grab, clamp, force with solver.local_region: this tool's region radius (mm, > 0); 0: the solver's.
   double local_region_mm = 0;
+  // cautery: the most tissue it removes per second (mm^3/s, > 0).
+  double removal_rate_mm3_s = 0;
+
+  ToolPrimitive acts() const { return type->acts; }
+  const char* kind() const { return type->name; }
 };
 
 // A picture the pipeline makes from the trajectory with ctsurg-render (scripts/Makefile); ctsurg-sim

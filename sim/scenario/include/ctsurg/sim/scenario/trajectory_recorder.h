@@ -58,6 +58,7 @@ class TrajectoryRecorder {
   void finish_into(Trajectory& traj, double dt) const;  // dt, metrics, closing triangles
   size_t tools_ = 0;                // the timeline's tools recorded
   size_t blades_ = 0;               // cut tools
+  bool removal_ = false;            // a tool removes tissue: the removed_volume metric (mm^3) is recorded
   size_t stitches_ = 0;             // the sutures' stitches
   std::vector<int64_t> closing_;    // per topology: its last triangles closing cut holes
   std::vector<TrajectoryMetric> metrics_;

@@ -8,10 +8,12 @@
 // active: the particles strictly inside its sphere; released when it stops), a probe pushes the free
 // particles out of its sphere, a force adds (F / n) / m dt^2 to each of the n free particles inside its
 // sphere at its start (the same update as the force inside the step), a suture's stitches pull their
-// particles (suture.h: placed when it starts, tightened over its window, kept after), and a blade cuts
+// particles (suture.h: placed when it starts, tightened over its window, kept after), a blade cuts
 // every spring and surface triangle its edge crossed along each sweep (two triangles per sweep:
-// tool_shapes.h); with the surface's close_cuts, the holes the sweep left are then closed
-// (hole_filling.h).
+// tool_shapes.h), and a cautery removes the particles inside its tip at its rate, nearest first
+// (particle_removal.h), with the surface triangles over them; with the surface's close_cuts, the holes
+// the sweep or the crater left are then closed (hole_filling.h). The engine sees each tool as the
+// primitive it acts through (base/simulation_engine.h), never as a tool kind.
 //
 // Stability: check_stability() runs the guard (stability.h) on the state; energy growth is not
 // counted over an interval in which a tool acted. On the CPU the engine restarts from its last
@@ -110,22 +112,26 @@ class SpringEngine final : public SimulationEngine {
     int handle = -1;              // grab: the stepper's name for it (a device holds several)
     std::vector<int32_t> loaded;  // force: the free particles sharing it
     bool released = false;        // let go, for good
-    std::vector<Stitch> stitches; // suture: placed when it starts
-    SutureSchedule schedule;      // suture: how they tighten
+    std::vector<Stitch> stitches; // stitch: placed when it starts
+    SutureSchedule schedule;      // stitch: how they tighten
+    double removal_budget_mm3 = 0;  // remove: the volume it may still take (rate x time on, less what it took)
   };
   struct Checkpoint {
     ParticleState state;
     SpringModel model;
     std::vector<Hold> holds;
     EmbeddedSurface surface;
+    std::vector<uint8_t> removed;
     double time = 0;
-    int64_t steps = 0, springs_cut = 0, triangles_removed = 0;
+    int64_t steps = 0, springs_cut = 0, triangles_removed = 0, removed_particles = 0;
+    double removed_volume = 0;
   };
 
   void apply_tools(const std::vector<ToolInput>& tools);
   void release_ended_grabs(const std::vector<ToolInput>& tools);
   void sweep_blade(const ToolInput& blade, const Vec3& from, const Vec3& to);
   void place_stitches(const ToolInput& suture, Hold& hold);
+  void remove_tissue(const ToolInput& tool, Hold& hold);
   double spring_sum(int32_t particle) const;  // K_i: the stiffness of the particle's present springs, g/s^2
   void note(const std::string& text) const;
   StabilityGuard make_guard() const;
@@ -150,6 +156,9 @@ class SpringEngine final : public SimulationEngine {
   std::vector<int32_t> held_components_;  // 3 particle + axis
   double time_ = 0;
   int64_t steps_ = 0, springs_cut_ = 0, triangles_removed_ = 0;
+  std::vector<uint8_t> removed_;  // #P, 1 = a remove tool took the particle (empty until one acts)
+  int64_t removed_particles_ = 0;
+  double removed_volume_ = 0;     // mm^3
   bool tool_work_ = false;       // a tool acted since the last stability check
   std::optional<Checkpoint> checkpoint_;
 };

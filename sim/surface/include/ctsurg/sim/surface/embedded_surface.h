@@ -42,6 +42,10 @@ class EmbeddedSurface {
   int64_t cut(const Triangle& blade, const std::vector<float>& vertices, const ParticleState& positions);
   // Removes the triangles crossing the blade, leaving the ties alone (remove_crossed_triangles).
   int64_t cut_triangles(const Triangle& blade, const std::vector<float>& vertices);
+  // Removes the triangles with a vertex tied (weight > 0) to a node marked in `gone` (#P flags, 1 = the
+  // tissue there was removed: a cautery, springs/particle_removal.h). Returns how many; the crater
+  // stays open until close_cut_holes(). InputError("surface", "gone", ...) for a tie beyond `gone`.
+  int64_t remove_tied_to(const std::vector<uint8_t>& gone);
   // Whether the holes cuts leave are closed (hole_filling.h); off by default. The surface's own
   // boundary (an open surface) is the one it has when this is switched on, and is never closed.
   void set_close_cuts(bool close);

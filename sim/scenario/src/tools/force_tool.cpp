@@ -1,0 +1,24 @@
+// force: {path, radius_mm, force_n, start_s, end_s, snap_to_tissue, local_region_mm}: a total force (N,
+// LPS) shared by the tissue inside its sphere when its window opens, until it closes (the load
+// primitive: the FEM paper's point load).
+#include "ctsurg/sim/scenario/tool_type.h"
+#include "tool_path.h"
+
+namespace ctsurg::sim {
+namespace {
+
+void parse_force(const YamlField& item, const ToolParseContext&, ToolAction& t) {
+  const YamlField f = item.child("force");
+  f.only(path_tool_fields({"radius_mm", "force_n", "local_region_mm"}));
+  t.radius_mm = f.child("radius_mm").positive();
+  t.force_n = f.child("force_n").vec3();
+  if (f.has("local_region_mm")) t.local_region_mm = f.child("local_region_mm").positive();
+  read_tool_path(f, t, false);
+}
+
+}  // namespace
+
+extern const ToolType kForceTool{.name = "force", .acts = ToolPrimitive::load, .record = ToolRecord::sphere, .record_name = "force",
+                                 .live = false, .parse = parse_force};
+
+}  // namespace ctsurg::sim

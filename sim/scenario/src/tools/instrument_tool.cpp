@@ -1,0 +1,31 @@
+// instrument: {path (with rotations), mesh, grid_spacing_mm, start_s, end_s, snap_to_tissue}: a rigid
+// closed mesh (.stl, .obj, .ply; mm, its own frame) that pushes the tissue out of itself (the
+// push_shape primitive). Not on a vessel; on kind: fem only with solver: dynamic.
+#include "ctsurg/sim/scenario/tool_type.h"
+#include "tool_path.h"
+
+namespace ctsurg::sim {
+namespace {
+
+void parse_instrument(const YamlField& item, const ToolParseContext& context, ToolAction& t) {
+  const YamlField f = item.child("instrument");
+  f.only(path_tool_fields({"mesh", "grid_spacing_mm"}));
+  const std::string mesh = f.child("mesh").text();
+  if (mesh.empty()) f.child("mesh").fail("must name a .stl, .obj or .ply file");
+  const std::filesystem::path p(mesh);
+  t.instrument_mesh = p.is_absolute() ? p : context.base_dir / p;
+  if (f.has("grid_spacing_mm")) t.instrument_spacing_mm = f.child("grid_spacing_mm").positive();
+  read_tool_path(f, t, true);
+  const Scenario& s = context.scenario;
+  if (s.model == ModelKind::vessel) item.fail("instrument is not supported by kind: vessel (grab, clamp, force, probe and cut are)");
+  if (s.model == ModelKind::fem && s.fem_solver != FemSolver::dynamic) {
+    item.fail("instrument needs solver: dynamic (contact is part of the explicit dynamics only, not of the static or implicit solvers)");
+  }
+}
+
+}  // namespace
+
+extern const ToolType kInstrumentTool{.name = "instrument", .acts = ToolPrimitive::push_shape, .record = ToolRecord::instrument,
+                                      .record_name = "instrument", .live = false, .parse = parse_instrument};
+
+}  // namespace ctsurg::sim

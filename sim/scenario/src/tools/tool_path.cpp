@@ -1,0 +1,64 @@
+#include "tool_path.h"
+
+#include "point_field.h"
+
+#include <limits>
+#include <optional>
+
+namespace ctsurg::sim {
+namespace {
+
+// A keyframe's orientation: quaternion: [w, x, y, z] or rotation: {axis: [x, y, z], angle_deg: a}.
+std::optional<Quaternion> keyframe_rotation(const YamlField& key) {
+  if (key.has("quaternion") && key.has("rotation")) key.fail("give one of quaternion, rotation");
+  if (key.has("quaternion")) {
+    const YamlField q = key.child("quaternion");
+    const auto items = q.items();
+    if (items.size() != 4) q.fail("expected [w, x, y, z]");
+    Quaternion v{};
+    for (size_t i = 0; i < 4; ++i) v[i] = items[i].number();
+    return checked_rotation(v, q.file(), q.path());
+  }
+  if (key.has("rotation")) {
+    const YamlField r = key.child("rotation");
+    r.only({"axis", "angle_deg"});
+    return axis_angle_rotation(r.child("axis").vec3(), r.child("angle_deg").number(), r.file(), r.path());
+  }
+  return std::nullopt;
+}
+
+}  // namespace
+
+std::vector<std::string> path_tool_fields(std::initializer_list<const char*> own) {
+  std::vector<std::string> fields{"start_s", "end_s", "path"};
+  fields.insert(fields.end(), own.begin(), own.end());
+  fields.emplace_back("snap_to_tissue");
+  return fields;
+}
+
+void read_tool_path(const YamlField& f, ToolAction& t, bool rotations, const std::string& rotation_refusal) {
+  const auto keys = f.child("path").items();
+  if (keys.empty()) f.child("path").fail("needs at least one keyframe");
+  for (size_t i = 0; i < keys.size(); ++i) {
+    if (rotations) {
+      keys[i].only({"t", "position_mm", "at_fraction", "offset_mm", "quaternion", "rotation"});
+    } else {
+      keys[i].only({"t", "position_mm", "at_fraction", "offset_mm"});
+    }
+    Keyframe k;
+    k.t = keys[i].child("t").non_negative();
+    if (i > 0 && !(k.t > t.path.back().t)) keys[i].child("t").fail("keyframe times must increase");
+    k.point = point_of(keys[i], i > 0);
+    k.rotation = keyframe_rotation(keys[i]);
+    if (!rotation_refusal.empty() && k.rotation && rotation_angle_deg(*k.rotation) > 1e-9) {
+      keys[i].child(keys[i].has("rotation") ? "rotation" : "quaternion").fail(rotation_refusal);
+    }
+    t.path.push_back(k);
+  }
+  t.start_s = f.has("start_s") ? f.child("start_s").non_negative() : t.path.front().t;
+  t.end_s = f.has("end_s") ? f.child("end_s").positive() : std::numeric_limits<double>::infinity();
+  if (!(t.end_s > t.start_s)) f.child("end_s").fail("must be after start_s");
+  if (f.has("snap_to_tissue")) t.snap_to_tissue = f.child("snap_to_tissue").boolean();
+}
+
+}  // namespace ctsurg::sim

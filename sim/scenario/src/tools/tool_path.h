@@ -1,0 +1,24 @@
+// What the moving tools' sections share (tools/*.cpp): the keyframed path, the window and
+// snap_to_tissue.
+#pragma once
+
+#include "ctsurg/sim/scenario/scenario.h"
+#include "yaml_field.h"
+
+#include <initializer_list>
+#include <string>
+#include <vector>
+
+namespace ctsurg::sim {
+
+// A moving tool's own fields followed by the shared ones (start_s, end_s, path, snap_to_tissue), for
+// YamlField::only.
+std::vector<std::string> path_tool_fields(std::initializer_list<const char*> own);
+
+// Reads f's path (>= 1 keyframe, increasing t; each t, position_mm / at_fraction / offset_mm and, with
+// `rotations`, a quaternion or rotation), then start_s (default: the first keyframe's t), end_s
+// (default: +inf, after start_s) and snap_to_tissue. A non-zero rotation fails with `rotation_refusal`
+// when that is not empty.
+void read_tool_path(const YamlField& f, ToolAction& t, bool rotations, const std::string& rotation_refusal = "");
+
+}  // namespace ctsurg::sim
