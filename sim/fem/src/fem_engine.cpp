@@ -3,6 +3,7 @@
 #include "ctsurg/core/error.h"
 #include "ctsurg/sim/base/parallel.h"
 #include "ctsurg/sim/fem/fem_cutting.h"
+#include "ctsurg/sim/fem/fem_element_removal.h"
 #include "ctsurg/sim/fem/fem_forces.h"
 #include "ctsurg/sim/fem/kernels/fem_quadratic_element_impl.h"
 #include "fem_rigid_modes.h"
@@ -369,6 +370,87 @@ void FemEngine::split_nodes(const std::vector<int32_t>& tets, const std::vector<
   }
 }
 
+// A remove tool (a cautery) takes the elements inside its tip at its rate (fem_element_removal.h): its
+// budget grows by rate x dt each step while the tip is on (steps x that for a batch of steps, taken at
+// its start) (dropped when it is off or finds nothing in
+// reach); the model is rebuilt without the elements taken, the nodes and the dynamics' state kept, at
+// the same step; the surface over them is opened and closed over the crater (hole_filling.h).
+void FemEngine::remove_tissue(const std::vector<ToolInput>& tools, int steps) {
+  if (removal_budget_.size() < tools.size()) removal_budget_.resize(tools.size(), 0.0);
+  bool any = false;
+  for (size_t i = 0; i < tools.size(); ++i) {
+    if (tools[i].acts != ToolPrimitive::remove) continue;
+    if (tools[i].active) {
+      any = true;
+    } else {
+      removal_budget_[i] = 0;
+    }
+  }
+  if (!any) return;
+  sync();
+  std::vector<uint8_t> removed(static_cast<size_t>(model_.tet_count()), 0);
+  double volume = 0;
+  int64_t count = 0;
+  std::string label;
+  for (size_t i = 0; i < tools.size(); ++i) {
+    if (tools[i].acts != ToolPrimitive::remove || !tools[i].active) continue;
+    removal_budget_[i] += tools[i].removal_rate_mm3_s * dynamics_->dt() * steps;
+    const FemElementRemoval r = fem_elements_in_sphere(model_, u_, {tools[i].centre, tools[i].radius_mm}, &removal_budget_[i]);
+    for (const int32_t e : r.elements) {
+      const double v = model_.rest_volume[static_cast<size_t>(e)];
+      if (removed[static_cast<size_t>(e)]) {
+        removal_budget_[i] += v;  // another tip took it this step
+        continue;
+      }
+      removed[static_cast<size_t>(e)] = 1;
+      volume += v;
+      ++count;
+      label = tools[i].label;
+    }
+    if (r.exhausted) removal_budget_[i] = 0;
+  }
+  if (count == 0) return;
+  if (count == model_.tet_count()) throw InputError(options_.where, label, "removes every element of the model");
+  // The surface vertices in the elements taken, and every vertex's element in the model to come.
+  std::vector<uint8_t> vertex_gone;
+  if (!surface_.empty()) {
+    if (surface_element_.empty()) surface_element_ = surface_elements(model_, surface_.coupling(), options_.where);
+    vertex_gone.assign(surface_element_.size(), 0);
+    std::vector<int32_t> new_index(removed.size(), -1);
+    int32_t next = 0;
+    for (size_t e = 0; e < removed.size(); ++e)
+      if (!removed[e]) new_index[e] = next++;
+    for (size_t v = 0; v < surface_element_.size(); ++v) {
+      const int32_t e = surface_element_[v];
+      if (e < 0) continue;
+      vertex_gone[v] = removed[static_cast<size_t>(e)];
+      surface_element_[v] = new_index[static_cast<size_t>(e)];
+    }
+  }
+  const std::vector<Real> ru = dynamics_->raw_displacements(), rprev = dynamics_->raw_previous_displacements();
+  const double t = dynamics_->time();
+  const int64_t steps_taken = dynamics_->steps_taken();
+  options_.dt = dynamics_->dt();  // the run's step stays (taking elements away lowers no element's critical step)
+  model_ = fem_model_without(model_, removed);  // the same object: holds_ keeps its reference; the node ids stay
+  counts_.elements = model_.tet_count();
+  make_solvers();
+  dynamics_->restore_state(ru, rprev, t, steps_taken);
+  if (!holds_.nodal_forces().empty()) dynamics_->set_external_forces(holds_.nodal_forces());
+  had_grab_ = false;
+  removed_volume_ += volume;
+  if (!vertex_gone.empty()) {
+    // The holes the crater opens are closed; the surface's own boundary is the one it had before.
+    if (!surface_.close_cuts()) surface_.set_close_cuts(true);
+    const int64_t opened = surface_.remove_vertices(vertex_gone);
+    triangles_removed_ += opened;
+    if (opened > 0) {
+      std::vector<float> vertices;
+      surface_vertices(vertices);
+      surface_.close_cut_holes(vertices);
+    }
+  }
+}
+
 namespace {
 constexpr int32_t kMaxBodyMetrics = 16;
 }
@@ -414,10 +496,21 @@ void FemEngine::check_tools(const std::vector<ToolInput>& tools) const {
         }
         break;
       case ToolPrimitive::stitch:
-      case ToolPrimitive::remove:
         throw InputError(options_.where, tool.label,
                          tool.name + " runs on the spring models only (kind: spring_grid or explicit_springs); the FEM engine "
-                                     "neither stitches nor removes elements yet");
+                                     "does not stitch yet");
+      case ToolPrimitive::remove: {
+        // Removing elements rebuilds the model under the explicit dynamics' state (remove_tissue).
+        std::string why;
+        if (model_.order != 1) why = "needs linear (4-node) tets";
+        if (!dynamics_) why = "needs solver: dynamic (the explicit dynamics carries its state over a removal)";
+        if (backend_ != Backend::cpu) why = "runs on the cpu backend only; set backend: cpu";
+        if (options_.contact.enabled) why = "and contact together are not supported (the bodies are the mesh's pieces at the start)";
+        for (const ToolInput& other : tools)
+          if (other.acts == ToolPrimitive::separate) why = "and a blade on one FEM model are not supported (" + other.label + ")";
+        if (!why.empty()) throw InputError(options_.where, tool.label, tool.name + " " + why);
+        break;
+      }
     }
   }
 }
@@ -426,6 +519,7 @@ StabilityReport FemEngine::step(const std::vector<ToolInput>& tools, int steps) 
   if (!dynamics_ && !implicit_) throw RuntimeError(options_.where + ": the static FEM solver has no time steps (it solves each frame)");
   check_tools(tools);
   apply_cuts(tools);
+  remove_tissue(tools, steps);
   if (implicit_) return step_implicit(tools, steps);
   const double t_next = dynamics_->time() + dynamics_->dt();
   if (holds_.captures(tools)) sync();  // a tool captures the nodes where they are now
@@ -605,6 +699,7 @@ bool FemEngine::surface_vertex_region(std::vector<uint8_t>& flags) const {
 
 EngineMetrics FemEngine::metrics() const {
   EngineMetrics m;
+  m.removed_volume = removed_volume_;
   m.kinetic_energy = dynamics_ ? dynamics_->kinetic_energy() : implicit_ ? implicit_->kinetic_energy() : 0.0;
   m.elastic_energy = dynamics_ ? dynamics_->strain_energy() : implicit_ ? implicit_->strain_energy() : fem_strain_energy(model_, u_);
   double max_u = 0;

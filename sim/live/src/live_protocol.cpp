@@ -111,19 +111,16 @@ LiveMessage parse_live_message(std::string_view text, const LiveProtocolLimits& 
     const json& tool = member(m, "tool");
     if (!tool.is_string()) refuse("tool", "must be a string");
     const std::string kind = tool.get<std::string>();
-    const ToolType* type = find_tool_type(kind);
-    std::string live;
-    for (const ToolType* t : tool_types())
-      if (t->live) live += (live.empty() ? "" : ", ") + std::string(t->name);
-    if (type == nullptr || !type->live) refuse("tool", "must be one of the live tools: " + live);
-    out.tool = type;
-    if (type->record == ToolRecord::sphere) {
+    const ToolType* begun = find_tool_type(kind);
+    if (begun == nullptr || !begun->live) refuse("tool", "must be one of the live tools: " + live_tool_names());
+    out.tool = begun;
+    if (begun->record == ToolRecord::sphere) {
       only(m, {"type", "tool", "radius_mm", "position_mm"});
       out.radius_mm = finite_number(member(m, "radius_mm"), "radius_mm");
       if (!(out.radius_mm > 0) || out.radius_mm > kMaxLiveToolRadiusMm) {
         refuse("radius_mm", number_text(out.radius_mm) + " is outside (0, " + number_text(kMaxLiveToolRadiusMm) + "] mm");
       }
-    } else if (type->record == ToolRecord::blade) {
+    } else if (begun->record == ToolRecord::blade) {
       only(m, {"type", "tool", "blade_edge_mm", "position_mm"});
       out.blade_edge_mm = vec3(member(m, "blade_edge_mm"), "blade_edge_mm");
       const auto& e = out.blade_edge_mm;
@@ -132,7 +129,7 @@ LiveMessage parse_live_message(std::string_view text, const LiveProtocolLimits& 
         refuse("blade_edge_mm", "its length " + number_text(l) + " mm is outside (0, " + number_text(kMaxLiveBladeMm) + "] mm");
       }
     } else {
-      refuse("tool", std::string(type->name) + " has no live form (a sphere or a blade)");
+      refuse("tool", std::string(begun->name) + " has no live form (a sphere or a blade)");
     }
     out.position_mm = position(m, limits);
   } else if (t == "move") {

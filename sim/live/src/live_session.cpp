@@ -60,10 +60,8 @@ void LiveSession::build(const std::vector<ToolAction>& user_tools, int64_t repla
 
 int LiveSession::begin_tool(const LiveToolSpec& spec) {
   if (spec.kind == nullptr || !spec.kind->live) {
-    std::string live;
-    for (const ToolType* t : tool_types())
-      if (t->live) live += (live.empty() ? "" : ", ") + std::string(t->name);
-    throw InputError(kSessionWhere, "tool", std::string(spec.kind ? spec.kind->name : "no tool") + " is not a live tool (" + live + ")");
+    throw InputError(kSessionWhere, "tool", std::string(spec.kind ? spec.kind->name : "no tool") + " is not a live tool (" +
+                                                live_tool_names() + ")");
   }
   if (!finite3(spec.position_mm)) throw InputError(kSessionWhere, "position_mm", "must be three finite numbers");
   if (spec.kind->record == ToolRecord::blade) {

@@ -362,6 +362,11 @@ static Scenario parse_fields(const std::string& text, const fs::path& file, cons
         }
       }
     }
+    for (const ToolAction& tool : s.tools) {
+      if (tool.acts() == ToolPrimitive::remove) {
+        c.fail(std::string("not with a tool that removes tissue (") + tool.label + "): the bodies are the mesh's pieces at the start");
+      }
+    }
   }
   if (top.has("solver")) {
     if (s.model != ModelKind::fem || s.fem_solver == FemSolver::dynamic)

@@ -176,11 +176,8 @@ void ToolTimeline::inputs(double t0, double t1, double min_sweep_mm, std::vector
 
 size_t ToolTimeline::add_tool(const ToolAction& spec, const Vec3& origin, const std::string& where) {
   if (spec.type == nullptr || !spec.type->live) {
-    std::string live;
-    for (const ToolType* t : tool_types())
-      if (t->live) live += (live.empty() ? "" : ", ") + std::string(t->name);
     throw InputError(where, spec.label, std::string(spec.type ? spec.kind() : "a tool without a type") +
-                                            " cannot be added while running (" + live + " can)");
+                                            " cannot be added while running (" + live_tool_names() + " can)");
   }
   if (spec.path.empty() || spec.snap_to_tissue) throw InputError(where, spec.label, "needs a first keyframe and no snap_to_tissue");
   if (!(spec.end_s > spec.start_s)) throw InputError(where, spec.label, "its window must end after it starts");

@@ -25,6 +25,13 @@ std::string tool_type_names(const std::string& suffix) {
   return names;
 }
 
+std::string live_tool_names() {
+  std::string names;
+  for (const ToolType* t : tool_types())
+    if (t->live) names += (names.empty() ? "" : ", ") + std::string(t->name);
+  return names;
+}
+
 const ToolType& tool_type(const std::string& name, const std::string& where, const std::string& field) {
   const ToolType* t = find_tool_type(name);
   if (t == nullptr) throw InputError(where, field, "unknown tool '" + name + "' (the tools are " + tool_type_names() + ")");

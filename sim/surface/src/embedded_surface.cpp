@@ -37,20 +37,26 @@ int64_t EmbeddedSurface::cut_triangles(const Triangle& blade, const std::vector<
 }
 
 int64_t EmbeddedSurface::remove_tied_to(const std::vector<uint8_t>& gone) {
-  const auto tied_to_gone = [&](uint32_t v) {
+  const int64_t nv = vertex_count();
+  std::vector<uint8_t> vertex_gone(static_cast<size_t>(nv), 0);
+  for (int64_t v = 0; v < nv; ++v) {
     for (size_t k = 0; k < 8; ++k) {
       const int32_t p = coupling_.particles[8 * static_cast<size_t>(v) + k];
       if (p < 0 || !(coupling_.weights[8 * static_cast<size_t>(v) + k] > 0)) continue;
       if (static_cast<size_t>(p) >= gone.size()) {
         throw InputError("surface", "gone", "node " + std::to_string(p) + " is beyond the " + std::to_string(gone.size()) + " flags");
       }
-      if (gone[static_cast<size_t>(p)]) return true;
+      if (gone[static_cast<size_t>(p)]) vertex_gone[static_cast<size_t>(v)] = 1;
     }
-    return false;
-  };
+  }
+  return remove_vertices(vertex_gone);
+}
+
+int64_t EmbeddedSurface::remove_vertices(const std::vector<uint8_t>& gone) {
+  if (static_cast<int64_t>(gone.size()) != vertex_count()) throw InputError("surface", "gone", "expected one flag per vertex");
   size_t kept = 0;
   for (size_t f = 0; f < cut_.size(); f += 3) {
-    if (tied_to_gone(cut_[f]) || tied_to_gone(cut_[f + 1]) || tied_to_gone(cut_[f + 2])) continue;
+    if (gone[cut_[f]] || gone[cut_[f + 1]] || gone[cut_[f + 2]]) continue;
     for (size_t c = 0; c < 3; ++c) cut_[kept + c] = cut_[f + c];
     kept += 3;
   }

@@ -517,9 +517,9 @@ time:)";
       {"rate_mm3_per_s: 40", "rate_mm3_per_s: 1e9", "tools[2].cautery.rate_mm3_per_s: must be at most"},
       {"      rate_mm3_per_s: 40\n", "", "s.yaml: tools[2].cautery.rate_mm3_per_s: missing"},
       {"rate_mm3_per_s: 40", "rate_mm3_per_s: 40\n      force_n: [0, 0, 1]", "tools[2].cautery.force_n: unknown key"},
-      // Only the spring models remove tissue: the FEM is refused, naming the tool.
-      {"kind: spring_grid", "kind: fem\n  tetmesh: t.h5",
-       "tools[2]: cautery removes tissue from the spring models only (kind: spring_grid or explicit_springs); kind: fem cannot"},
+      // The FEM removes elements under its explicit dynamics only, and not with contact.
+      {"kind: spring_grid", "kind: fem\n  tetmesh: t.h5\n  solver: static",
+       "tools[2]: cautery on kind: fem needs solver: dynamic and elements: linear"},
       // An unknown tool names every tool there is.
       {"  - cautery:", "  - laser:", "tools[2].laser: unknown key (known here: cautery, clamp, cut, force, grab, instrument, probe, suture)"},
   };
@@ -527,6 +527,20 @@ time:)";
     const std::string e = error_of(replaced(text, c.from, c.to));
     EXPECT_NE(e.find(c.expected), std::string::npos) << "for " << c.to << "\n got: " << e;
   }
+  // On the explicit FEM it is accepted; after a blade, or with contact, it is not.
+  const std::string fem_with_blade =
+      replaced(replaced(text, "kind: spring_grid", "kind: fem\n  tetmesh: t.h5\n  solver: dynamic"), "  coupling: nearest_particle\n", "");
+  EXPECT_NE(error_of(fem_with_blade).find("tools[2]: cautery and a blade (tools[1] (cut)) on one kind: fem model are not supported"),
+            std::string::npos)
+      << error_of(fem_with_blade);
+  const std::string fem = replaced(fem_with_blade,
+                                   "  - cut:\n      blade_edge_mm: [0, 0, 20]\n      path:\n        - {t: 0.2, position_mm: [1, 2, 3]}\n"
+                                   "        - {t: 0.3, position_mm: [11, 2, 3]}\n",
+                                   "");
+  EXPECT_EQ(error_of(fem), "(accepted)");
+  EXPECT_NE(error_of(fem + "contact: {self: true}\n").find("contact: not with a tool that removes tissue (tools[1] (cautery))"),
+            std::string::npos)
+      << error_of(fem + "contact: {self: true}\n");
 }
 
 TEST(Scenario, EveryRegisteredToolHasAParserAndAName) {

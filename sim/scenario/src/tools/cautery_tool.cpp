@@ -1,8 +1,9 @@
 // cautery: {path, radius_mm, rate_mm3_per_s, start_s, end_s, snap_to_tissue}: a hot tip that removes the
 // tissue inside its sphere while its window is open, at most rate_mm3_per_s of it per second, nearest
-// its centre first (the remove primitive: springs/particle_removal.h); the surface is closed over the
+// its centre first (the remove primitive); the surface is closed over the
 // crater (close_cuts) and the volume removed is the trajectory's removed_volume metric. The spring
-// models only: a vessel is a rod, and the FEM engine does not remove elements yet.
+// models (particles, springs/particle_removal.h) and the explicit FEM on linear tets (elements,
+// fem/fem_element_removal.h); not a vessel (a rod of atoms).
 #include "ctsurg/sim/scenario/tool_type.h"
 #include "tool_path.h"
 
@@ -22,9 +23,17 @@ void parse_cautery(const YamlField& item, const ToolParseContext& context, ToolA
   }
   read_tool_path(f, t, false);
   const Scenario& s = context.scenario;
-  if (s.model == ModelKind::vessel || s.model == ModelKind::fem) {
-    item.fail("cautery removes tissue from the spring models only (kind: spring_grid or explicit_springs); kind: " +
-              std::string(to_string(s.model)) + " cannot remove material");
+  if (s.model == ModelKind::vessel) {
+    item.fail("cautery removes tissue from the spring models and the FEM; kind: vessel (a rod of atoms) cannot remove material");
+  }
+  if (s.model == ModelKind::fem && (s.fem_solver != FemSolver::dynamic || s.fem_order != 1)) {
+    item.fail("cautery on kind: fem needs solver: dynamic and elements: linear (the explicit dynamics carries its state over the "
+              "elements removed)");
+  }
+  for (const ToolAction& other : s.tools) {
+    if (s.model == ModelKind::fem && other.acts() == ToolPrimitive::separate) {
+      item.fail("cautery and a blade (" + other.label + ") on one kind: fem model are not supported");
+    }
   }
 }
 

@@ -21,7 +21,11 @@
 // Backend::cuda runs the explicit dynamics and the iterative solves' conjugate gradients on the device;
 // the factorisations stay on the CPU. Probes need the explicit dynamics (contact is part of no other
 // solver); a blade separates linear tets and splits their nodes (fem_cutting.h: the solvers are rebuilt on
-// the new mesh with the state carried over). Restarts with a halved step are not offered (the implicit dynamics
+// the new mesh with the state carried over); a cautery (the remove primitive) takes the elements inside
+// its tip at its rate under the explicit dynamics, linear tets, no contact and no blade beside it
+// (fem_element_removal.h: the model rebuilt without them, nodes, state and step kept, the surface over
+// them opened and closed over the crater). The engine sees each tool as the primitive it acts through,
+// never as a tool kind. Restarts with a halved step are not offered (the implicit dynamics
 // halves a failing step itself).
 //
 // Metrics beyond the engine's common ones: newton_iterations and cg_iterations of the last static
@@ -118,6 +122,8 @@ class FemEngine final : public SimulationEngine {
   // (each body's own, a cut's lips included), so a model meshed without a surface still renders.
   const std::vector<uint32_t>& triangles() const override { return surface_.empty() ? boundary_triangles_ : surface_.triangles(); }
   const std::vector<Real>& surface_rest_vertices() const override { return surface_.rest_vertices(); }
+  // The triangles closing a cautery's crater (a blade's cut is left open on the FEM).
+  int64_t closing_triangles() const override { return surface_.fill_triangle_count(); }
   EngineMetrics metrics() const override;
   bool engaged(size_t tool) const override { return holds_.engaged(tool); }
   // With local_region_mm: the last frame's region, per node (#N: kFemOutsideRegion, kFemInRegion,
@@ -138,6 +144,7 @@ class FemEngine final : public SimulationEngine {
   void make_solvers();
   void apply_cuts(const std::vector<ToolInput>& tools);
   void split_nodes(const std::vector<int32_t>& tets, const std::vector<int32_t>& parents, const std::vector<ToolInput>& tools);
+  void remove_tissue(const std::vector<ToolInput>& tools, int steps);
   StabilityReport step_implicit(const std::vector<ToolInput>& tools, int steps);
 
   FemModel model_;
@@ -177,6 +184,9 @@ class FemEngine final : public SimulationEngine {
   std::vector<int32_t> surface_element_;  // #V
   std::vector<int32_t> surface_corner_;   // #V x 8: the tet corner (0..3) of each tie, -1 for none
   int64_t faces_cut_ = 0, triangles_removed_ = 0, nodes_split_ = 0;
+  // Removal (fem_element_removal.h): each remove tool's budget (mm^3), and the volume taken so far.
+  std::vector<double> removal_budget_;
+  double removed_volume_ = 0;
   // With contact: each element's body at the start (the mesh's connected pieces; a cut later creates or
   // removes no element, so the bodies' volumes stay comparable), for the metrics body_volume_<b>.
   std::vector<int32_t> element_body_;

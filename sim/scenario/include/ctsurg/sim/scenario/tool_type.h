@@ -55,5 +55,7 @@ const ToolType* find_tool_type(const std::string& name);
 const ToolType& tool_type(const std::string& name, const std::string& where = "tools", const std::string& field = "tool");
 // "grab, clamp, probe, cut, force, instrument, suture, cautery" (with `suffix` after each: ":").
 std::string tool_type_names(const std::string& suffix = "");
+// The tools a live session may begin (ToolType::live): "grab, probe, cut".
+std::string live_tool_names();
 
 }  // namespace ctsurg::sim

@@ -46,6 +46,9 @@ class EmbeddedSurface {
   // tissue there was removed: a cautery, springs/particle_removal.h). Returns how many; the crater
   // stays open until close_cut_holes(). InputError("surface", "gone", ...) for a tie beyond `gone`.
   int64_t remove_tied_to(const std::vector<uint8_t>& gone);
+  // Removes the triangles with a vertex flagged in `gone` (#V; an FEM model's vertices whose element was
+  // removed). Returns how many; InputError("surface", "gone", ...) for a size that is not #V.
+  int64_t remove_vertices(const std::vector<uint8_t>& gone);
   // Whether the holes cuts leave are closed (hole_filling.h); off by default. The surface's own
   // boundary (an open surface) is the one it has when this is switched on, and is never closed.
   void set_close_cuts(bool close);
