@@ -23,12 +23,14 @@ import shlex
 import subprocess
 import sys
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from render_plan import render_plan  # noqa: E402 (the one mapping from a render request to pictures)
+
 STAGE_OUTPUTS = {"grid.h5", "surface.h5", "surface_textured.h5", "tetmesh.h5", "centerline.h5"}
 INPUT_KINDS = ("grid", "tetmesh", "surface", "centerline")
 # Models whose trajectory carries its own triangles (an FEM run without model.surface: its tet mesh's
 # boundary; a vessel: the tube drawn from its atoms), which ctsurg-render draws without --surface.
 OWN_SURFACE_MODELS = {"fem", "vessel"}
-MULTI = (",", ":")
 
 
 def fail(msg):
@@ -99,7 +101,7 @@ def main():
         if not surface and d.get("model") not in OWN_SURFACE_MODELS:
             fail(f"{a.scenario}: render '{r['name']}' needs model.surface (a surface to draw)")
         pre = [traj] + ([surface] if surface else [])
-        ref_opt = ""
+        ref_path = None
         ref = r.get("reference") or ""
         if ref and ref != "rest":
             if ref in STAGE_OUTPUTS:
@@ -118,30 +120,18 @@ def main():
                          f"nor another scenario of this patient ({', '.join(sorted(k for k in others if k))})")
                 ref_path = others[ref]
             pre.append(ref_path)
-            ref_opt = f" --reference {q(ref_path)}"
-        frames = str(r.get("frames", "last"))
-        multi = frames == "all" or any(c in frames for c in MULTI)
-        surface_opt = f"--surface {q(surface)} " if surface else ""
-        common = (f"{surface_opt}--trajectory {q(traj)} --layout {q(r['layout'])} --frames {q(frames)} "
-                  f"--view {q(r['view'])} --size {int(r['size'])}{ref_opt} $({key}.RENDER_ARGS)")
-        if r["layout"] == "viewer":
-            # The frames as an animated glTF and the offline HTML page that plays it (docs/render.md).
-            target = f"{out}/{r['name']}.html"
-            glb = f"{out}/{r['name']}.glb"
-            lines += [f"{target} {glb} &: {' '.join(pre)} $(BIN)/ctsurg-render",
-                      f"\t$(BIN)/ctsurg-render -q {surface_opt}--trajectory {q(traj)} --frames {q(frames)} "
-                      f"--gltf {q(glb)} --viewer {q(target)} $({key}.RENDER_ARGS)"]
-        elif multi:
-            target = f"{out}/{r['name']}.frames"
-            folder = f"{out}/{r['name']}"
-            lines += [f"{target}: {' '.join(pre)} $(BIN)/ctsurg-render",
+        plan = render_plan(r, out, traj, surface, ref_path)
+        args = " ".join(q(x) for x in plan["args"])
+        target = plan["outputs"][0]
+        rule = f"{' '.join(q(o) for o in plan['outputs'])}{' &' if len(plan['outputs']) > 1 else ''}: {' '.join(pre)} $(BIN)/ctsurg-render"
+        if plan["kind"] == "frames":
+            folder = plan["folder"]
+            lines += [rule,
                       f"\tmkdir -p {q(folder)}",
-                      f"\t$(BIN)/ctsurg-render -q {common} -o {q(folder + '/' + r['name'] + '_{}.png')}",
+                      f"\t$(BIN)/ctsurg-render -q {args} $({key}.RENDER_ARGS)",
                       f"\tcd {q(folder)} && ls {q(r['name'])}_*.png > {q(target)}.tmp && mv {q(target)}.tmp {q(target)}"]
         else:
-            target = f"{out}/{r['name']}.png"
-            lines += [f"{target}: {' '.join(pre)} $(BIN)/ctsurg-render",
-                      f"\t$(BIN)/ctsurg-render -q {common} -o {q(target)}"]
+            lines += [rule, f"\t$(BIN)/ctsurg-render -q {args} $({key}.RENDER_ARGS)"]
         targets.append(target)
     lines.append(f"{key}.targets += {' '.join(targets)}")
 

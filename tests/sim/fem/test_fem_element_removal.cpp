@@ -9,6 +9,7 @@
 #include "ctsurg/core/error.h"
 #include "ctsurg/sim/fem/fem_engine.h"
 #include "fem_test_models.h"
+#include "tool_inputs.h"
 
 #include <gtest/gtest.h>
 
@@ -86,18 +87,7 @@ FemEngine dynamic_bar(FemSolver solver = FemSolver::dynamic) {
   return FemEngine(std::move(m), std::move(supports), EmbeddedSurface(), {0, 0, 0}, o);
 }
 
-ToolInput cautery(const Vec3& centre, double rate, bool active = true) {
-  ToolInput t;
-  t.acts = ToolPrimitive::remove;
-  t.name = "cautery";
-  t.label = "tools[0] (cautery)";
-  t.radius_mm = 1.0;
-  t.removal_rate_mm3_s = rate;
-  t.active = active;
-  t.centre = centre;
-  t.start_centre = centre;
-  return t;
-}
+ToolInput cautery(const Vec3& centre, double rate, bool active = true) { return test::cautery_input(centre, 1.0, rate, active); }
 
 double element_volume(const FemEngine& e) {
   const auto names = e.extra_metrics();
@@ -132,13 +122,7 @@ TEST(FemEngineCautery, RemovesElementsAtItsRateAndTheVolumeFollows) {
   EXPECT_NEAR(e.metrics().removed_volume, 1.0, 1e-12);
   // The bar still moves as a whole: a grab of the free end after the removal pulls it.
   for (int k = 0; k < 50; ++k) {
-    ToolInput g;
-    g.acts = ToolPrimitive::hold;
-    g.name = "grab";
-    g.label = "tools[1] (grab)";
-    g.radius_mm = 0.6;
-    g.active = true;
-    g.centre = {8, 2, 2 + 0.002 * k};
+    ToolInput g = test::sphere_tool_input(ToolPrimitive::hold, "grab", {8, 2, 2 + 0.002 * k}, 0.6, true, 1);
     g.start_centre = {8, 2, 2};
     ASSERT_TRUE(e.step({cautery({7.5, 1.0, 1.0}, rate, false), g}, 1).stable);
   }

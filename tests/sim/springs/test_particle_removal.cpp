@@ -12,6 +12,7 @@
 #include "ctsurg/sim/springs/spring_calibration.h"
 #include "ctsurg/sim/springs/spring_engine.h"
 #include "sim_test_models.h"
+#include "tool_inputs.h"
 
 #include <gtest/gtest.h>
 
@@ -112,18 +113,7 @@ SpringEngine bar_engine() {
   return SpringEngine(std::move(model), std::move(state), std::move(surface), {0, 0, 0}, o);
 }
 
-ToolInput cautery(const Vec3& centre, double rate, bool active = true) {
-  ToolInput t;
-  t.acts = ToolPrimitive::remove;
-  t.name = "cautery";
-  t.label = "tools[0] (cautery)";
-  t.radius_mm = 2.5;
-  t.removal_rate_mm3_s = rate;
-  t.active = active;
-  t.centre = centre;
-  t.start_centre = centre;
-  return t;
-}
+ToolInput cautery(const Vec3& centre, double rate, bool active = true) { return test::cautery_input(centre, 2.5, rate, active); }
 
 TEST(SpringEngineCautery, RemovesAtItsRateCountsTheVolumeAndClosesTheCrater) {
   SpringEngine e = bar_engine();

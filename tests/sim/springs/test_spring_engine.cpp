@@ -11,6 +11,7 @@
 #include "ctsurg/sim/base/fixed_regions.h"
 #include "ctsurg/sim/springs/spring_calibration.h"
 #include "sim_test_models.h"
+#include "tool_inputs.h"
 
 #include <gtest/gtest.h>
 
@@ -43,15 +44,8 @@ SpringEngine engine(bool surface = true, std::vector<std::string>* notes = nullp
 }
 
 ToolInput sphere_tool(ToolPrimitive kind, const Vec3& centre, double radius, bool active = true) {
-  ToolInput t;
-  t.acts = kind;
-  t.name = kind == ToolPrimitive::hold ? "grab" : kind == ToolPrimitive::load ? "force" : "probe";
-  t.label = "tools[0] (" + t.name + ")";
-  t.radius_mm = radius;
-  t.active = active;
-  t.centre = centre;
-  t.start_centre = centre;
-  return t;
+  return test::sphere_tool_input(kind, kind == ToolPrimitive::hold ? "grab" : kind == ToolPrimitive::load ? "force" : "probe", centre,
+                                 radius, active);
 }
 
 double x_of(const SpringEngine& e, int32_t p) { return e.state().x[static_cast<size_t>(p)]; }

@@ -18,9 +18,7 @@ void parse_instrument(const YamlField& item, const ToolParseContext& context, To
   read_tool_path(f, t, true);
   const Scenario& s = context.scenario;
   if (s.model == ModelKind::vessel) item.fail("instrument is not supported by kind: vessel (grab, clamp, force, probe and cut are)");
-  if (s.model == ModelKind::fem && s.fem_solver != FemSolver::dynamic) {
-    item.fail("instrument needs solver: dynamic (contact is part of the explicit dynamics only, not of the static or implicit solvers)");
-  }
+  require_fem_contact_solver(item, s, "instrument");
 }
 
 }  // namespace

@@ -12,10 +12,7 @@ void parse_probe(const YamlField& item, const ToolParseContext& context, ToolAct
   f.only(path_tool_fields({"radius_mm"}));
   t.radius_mm = f.child("radius_mm").positive();
   read_tool_path(f, t, false);
-  const Scenario& s = context.scenario;
-  if (s.model == ModelKind::fem && s.fem_solver != FemSolver::dynamic) {
-    item.fail("probe needs solver: dynamic (contact is part of the explicit dynamics only, not of the static or implicit solvers)");
-  }
+  require_fem_contact_solver(item, context.scenario, "probe");
 }
 
 }  // namespace

@@ -61,4 +61,11 @@ void read_tool_path(const YamlField& f, ToolAction& t, bool rotations, const std
   if (f.has("snap_to_tissue")) t.snap_to_tissue = f.child("snap_to_tissue").boolean();
 }
 
+void require_fem_contact_solver(const YamlField& item, const Scenario& s, const char* tool) {
+  if (s.model == ModelKind::fem && s.fem_solver != FemSolver::dynamic) {
+    item.fail(std::string(tool) +
+              " needs solver: dynamic (contact is part of the explicit dynamics only, not of the static or implicit solvers)");
+  }
+}
+
 }  // namespace ctsurg::sim

@@ -21,4 +21,8 @@ std::vector<std::string> path_tool_fields(std::initializer_list<const char*> own
 // when that is not empty.
 void read_tool_path(const YamlField& f, ToolAction& t, bool rotations, const std::string& rotation_refusal = "");
 
+// A tool that pushes the tissue (probe, instrument) on kind: fem needs the explicit dynamics (contact is
+// part of no other solver): fails on `item` naming the tool otherwise.
+void require_fem_contact_solver(const YamlField& item, const Scenario& s, const char* tool);
+
 }  // namespace ctsurg::sim
