@@ -11,6 +11,7 @@
 #include "ctsurg/sim/base/fixed_regions.h"
 #include "ctsurg/sim/springs/spring_calibration.h"
 #include "ctsurg/sim/springs/spring_engine.h"
+#include "liver_block_engine.h"
 #include "sim_test_models.h"
 #include "tool_inputs.h"
 
@@ -98,20 +99,8 @@ TEST(ParticleRemoval, BadInputIsRefused) {
   EXPECT_THROW(remove_particles_in_sphere(m, state, removed, {{30, -16, 34}, 2}, 0.0, &budget), InputError);
 }
 
-SpringEngine bar_engine() {
-  SpringGridModel model = liver_bar();
-  const auto occ = test::block_occupancy(10, 3, 3, 2.0);
-  const SurfaceMesh mesh = test::block_surface(occ);
-  ParticleState state = model.make_state();
-  fix_particles(state, particles_in_box(model.rest_positions, {{0, -100, -100}, {12.5, 100, 100}}));
-  EmbeddedSurface surface(couple_surface(mesh, model.lattice, model.cells), mesh.triangles);
-  surface.set_close_cuts(true);
-  EngineOptions o;
-  o.mass_damping = 30;
-  o.density = liver_density();
-  o.where = "s.yaml";
-  return SpringEngine(std::move(model), std::move(state), std::move(surface), {0, 0, 0}, o);
-}
+// The bar fixed at its x = 12 end, with its surface (close_cuts on).
+SpringEngine bar_engine() { return test::liver_block_engine(10, 3, 3, 12.5); }
 
 ToolInput cautery(const Vec3& centre, double rate, bool active = true) { return test::cautery_input(centre, 2.5, rate, active); }
 

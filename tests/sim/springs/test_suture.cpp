@@ -11,6 +11,7 @@
 #include "ctsurg/sim/base/fixed_regions.h"
 #include "ctsurg/sim/springs/spring_calibration.h"
 #include "ctsurg/sim/springs/spring_engine.h"
+#include "liver_block_engine.h"
 #include "sim_test_models.h"
 
 #include <gtest/gtest.h>
@@ -36,19 +37,7 @@ std::string field_of(F f, std::string* message = nullptr) {
 
 // The 8 x 4 x 4 block (cell centres x 12 .. 26, y -18 .. -12, z 32 .. 38 mm), liver springs, x < 13 fixed,
 // with its surface.
-SpringEngine block_engine() {
-  const auto occ = test::block_occupancy(8, 4, 4, 2.0);
-  SpringGridModel model = build_spring_grid_model(occ, calibrated_grid_material(material_preset("liver"), occ.geometry));
-  const SurfaceMesh mesh = test::block_surface(occ);
-  ParticleState state = model.make_state();
-  fix_particles(state, particles_in_box(model.rest_positions, {{0, -100, -100}, {13, 100, 100}}));
-  EmbeddedSurface s(couple_surface(mesh, model.lattice, model.cells), mesh.triangles);
-  s.set_close_cuts(true);
-  EngineOptions o;
-  o.mass_damping = 30;
-  o.where = "s.yaml";
-  return SpringEngine(std::move(model), std::move(state), std::move(s), {0, 0, 0}, o);
-}
+SpringEngine block_engine() { return test::liver_block_engine(8, 4, 4, 13); }
 
 // Cuts the block through at x = 19 (between the cell centres 18 and 20).
 void cut_through(SpringEngine& e) {
