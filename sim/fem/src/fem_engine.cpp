@@ -370,11 +370,11 @@ void FemEngine::split_nodes(const std::vector<int32_t>& tets, const std::vector<
   }
 }
 
-// A remove tool (a cautery) takes the elements inside its tip at its rate (fem_element_removal.h): its
-// budget grows by rate x dt each step while the tip is on (steps x that for a batch of steps, taken at
-// its start) (dropped when it is off or finds nothing in
-// reach); the model is rebuilt without the elements taken, the nodes and the dynamics' state kept, at
-// the same step; the surface over them is opened and closed over the crater (hole_filling.h).
+// A remove tool (a cautery) takes the elements inside its tip at its rate (fem_element_removal.h). Its
+// budget grows by rate x dt a step while the tip is on (a batch of steps adds them all, taken at the
+// batch's start) and is dropped when the tip is off or finds nothing in reach. The model is rebuilt
+// without the elements taken, the nodes, the dynamics' state and the step kept; the surface over them
+// is opened and closed over the crater (hole_filling.h).
 void FemEngine::remove_tissue(const std::vector<ToolInput>& tools, int steps) {
   if (removal_budget_.size() < tools.size()) removal_budget_.resize(tools.size(), 0.0);
   bool any = false;

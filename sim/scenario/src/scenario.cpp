@@ -21,11 +21,6 @@ namespace fs = std::filesystem;
 
 namespace {
 
-fs::path resolve(const fs::path& base, const std::string& p) {
-  const fs::path q(p);
-  return q.is_absolute() ? q : base / q;
-}
-
 // One tool: exactly one key of the registry (tool_type.h), whose type reads its own section.
 ToolAction tool_of(const YamlField& item, const ToolParseContext& context) {
   const std::string expected = "expected one of " + tool_type_names(":") + " with the tool's fields under it";
@@ -195,11 +190,11 @@ static Scenario parse_fields(const std::string& text, const fs::path& file, cons
     }
     const std::string path = m.child("centerline").text();
     if (path.empty()) m.child("centerline").fail("must name a centerline file (ctsurg-centerline)");
-    s.centerline = resolve(base_dir, path);
+    s.centerline = resolve_scenario_path(base_dir, path);
   } else if (m.has("centerline")) {
     m.child("centerline").fail("only for kind: vessel");
   }
-  if ((s.model != ModelKind::fem && s.model != ModelKind::vessel) || m.has("grid")) s.grid = resolve(base_dir, m.child("grid").text());
+  if ((s.model != ModelKind::fem && s.model != ModelKind::vessel) || m.has("grid")) s.grid = resolve_scenario_path(base_dir, m.child("grid").text());
   if (m.has("material_law")) {
     m.child("material_law").fail("the law moved to the material section: write `material: {law: " + m.child("material_law").text() +
                                  ", ...}` (docs/sim.md, \"Materials\")");
@@ -215,13 +210,13 @@ static Scenario parse_fields(const std::string& text, const fs::path& file, cons
     if (s.fem_order == 2 && s.fem_solver == FemSolver::dynamic)
       m.child("elements").fail("quadratic tets need solver: static or implicit (the explicit dynamics runs linear tets)");
   }
-  if (m.has("surface")) s.surface = resolve(base_dir, m.child("surface").text());
+  if (m.has("surface")) s.surface = resolve_scenario_path(base_dir, m.child("surface").text());
   if (m.has("springs_from")) {
     if (s.model != ModelKind::explicit_springs) m.child("springs_from").fail("only for kind: explicit_springs");
     s.springs_from = m.child("springs_from").one_of({"grid", "tetmesh"}) == std::string("grid") ? SpringSource::grid
                                                                                                : SpringSource::tetmesh;
   }
-  if (m.has("tetmesh")) s.tetmesh = resolve(base_dir, m.child("tetmesh").text());
+  if (m.has("tetmesh")) s.tetmesh = resolve_scenario_path(base_dir, m.child("tetmesh").text());
   if (s.springs_from == SpringSource::tetmesh && s.tetmesh.empty()) m.child("tetmesh").fail("missing (springs_from: tetmesh)");
   if (s.model == ModelKind::fem && s.tetmesh.empty()) throw InputError(name, "model.tetmesh", "missing (kind: fem needs a tet mesh)");
   if (m.has("coupling")) {
@@ -305,7 +300,7 @@ static Scenario parse_fields(const std::string& text, const fs::path& file, cons
 
   const YamlField o = top.child("output");
   o.only({"trajectory", "frame_interval_s", "particles"});
-  s.trajectory = resolve(base_dir, o.child("trajectory").text());
+  s.trajectory = resolve_scenario_path(base_dir, o.child("trajectory").text());
   s.frame_interval_s = o.has("frame_interval_s") ? o.child("frame_interval_s").positive() : s.duration_s / 50;
   if (s.frame_interval_s > s.duration_s) o.child("frame_interval_s").fail("longer than the run");
   if (s.duration_s / s.frame_interval_s > kMaxFrames) {

@@ -7,6 +7,7 @@
 
 #include <array>
 #include <cstdint>
+#include <filesystem>
 #include <initializer_list>
 #include <string>
 #include <vector>
@@ -53,5 +54,12 @@ class YamlField {
   std::string path_;
   const std::string* file_;
 };
+
+// A file a scenario names (a stage output, an instrument's mesh, the trajectory): as given when absolute,
+// else relative to `base` (the scenario file's folder).
+inline std::filesystem::path resolve_scenario_path(const std::filesystem::path& base, const std::string& p) {
+  const std::filesystem::path q(p);
+  return q.is_absolute() ? q : base / q;
+}
 
 }  // namespace ctsurg::sim

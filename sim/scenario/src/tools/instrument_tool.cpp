@@ -12,8 +12,7 @@ void parse_instrument(const YamlField& item, const ToolParseContext& context, To
   f.only(path_tool_fields({"mesh", "grid_spacing_mm"}));
   const std::string mesh = f.child("mesh").text();
   if (mesh.empty()) f.child("mesh").fail("must name a .stl, .obj or .ply file");
-  const std::filesystem::path p(mesh);
-  t.instrument_mesh = p.is_absolute() ? p : context.base_dir / p;
+  t.instrument_mesh = resolve_scenario_path(context.base_dir, mesh);
   if (f.has("grid_spacing_mm")) t.instrument_spacing_mm = f.child("grid_spacing_mm").positive();
   read_tool_path(f, t, true);
   const Scenario& s = context.scenario;
