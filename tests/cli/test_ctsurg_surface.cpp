@@ -35,13 +35,13 @@ using ctsurg::test::TempDir;
 
 namespace {
 
-constexpr double kRadiusMm = 12.0, kCellMm = 2.0;
+constexpr double kSurfaceRadiusMm = 12.0, kCellMm = 2.0;
 
 using ctsurg::test::test_provenance;
 
 // A ball of radius 12 mm on 2 mm cells; fractions by s^3 supersampling (s = 2: multiples of 1/8,
 // many exactly 0.5, like a grid downsampled from a mask); `empty` gives all zeros.
-fs::path write_grid(const TempDir& dir, const std::string& name, bool empty = false, int s = 8) {
+fs::path write_surface_grid(const TempDir& dir, const std::string& name, bool empty = false, int s = 8) {
   ctsurg::ImageGeometry g;
   g.dims = {18, 17, 16};
   g.spacing = Eigen::Vector3d::Constant(kCellMm);
@@ -58,7 +58,7 @@ fs::path write_grid(const TempDir& dir, const std::string& name, bool empty = fa
         int in = 0;
         for (int c = 0; c < s * s * s; ++c) {
           const Eigen::Vector3d sub((c % s + 0.5) / s - 0.5, ((c / s) % s + 0.5) / s - 0.5, (c / (s * s) + 0.5) / s - 0.5);
-          in += (g.index_to_world(Eigen::Vector3d(double(i), double(j), double(k)) + sub) - centre).norm() <= kRadiusMm;
+          in += (g.index_to_world(Eigen::Vector3d(double(i), double(j), double(k)) + sub) - centre).norm() <= kSurfaceRadiusMm;
         }
         grid.fraction(i, j, k) = float(in) / (s * s * s);
         grid.occupancy(i, j, k) = grid.fraction(i, j, k) >= 0.5f;
@@ -125,7 +125,7 @@ fs::path write_block_ct(const TempDir& dir, bool at_border) {
 
 TEST(CtsurgSurface, GridToSurfaceFileIsClosedAndNearTheBall) {
   TempDir dir;
-  const fs::path grid = write_grid(dir, "ball_grid.h5");
+  const fs::path grid = write_surface_grid(dir, "ball_grid.h5");
   const auto r = run_tool("ctsurg-surface", {grid.string(), (dir / "ball.h5").string()});
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("triangles"), std::string::npos) << r.output;
@@ -134,7 +134,7 @@ TEST(CtsurgSurface, GridToSurfaceFileIsClosedAndNearTheBall) {
   const auto m = ctsurg::read_surface_mesh_file(dir / "ball.h5");
   EXPECT_GT(m.triangle_count(), 500);
   EXPECT_TRUE(closed_and_oriented(m));
-  const double ball = 4.0 / 3.0 * std::numbers::pi * std::pow(kRadiusMm, 3);
+  const double ball = 4.0 / 3.0 * std::numbers::pi * std::pow(kSurfaceRadiusMm, 3);
   EXPECT_NEAR(enclosed_volume(m), ball, 0.05 * ball);
   EXPECT_DOUBLE_EQ(m.iso, 0.5);
   EXPECT_EQ(m.quantity, "fraction");
@@ -151,7 +151,7 @@ TEST(CtsurgSurface, GridToSurfaceFileIsClosedAndNearTheBall) {
 // 0.5, so that marching cubes alone leaves coincident vertices.
 TEST(CtsurgSurface, DefaultIsSmoothedRawIsMarchingCubesAndNoneHasDegenerateTriangles) {
   TempDir dir;
-  const fs::path grid = write_grid(dir, "g.h5", false, 2);
+  const fs::path grid = write_surface_grid(dir, "g.h5", false, 2);
   const auto smoothed = run_tool("ctsurg-surface", {grid.string(), (dir / "s.h5").string()});
   ASSERT_EQ(smoothed.exit_code, 0) << smoothed.output;
   EXPECT_NE(smoothed.output.find("windowed-sinc 20 iterations"), std::string::npos) << smoothed.output;
@@ -204,7 +204,7 @@ TEST(CtsurgSurface, DefaultIsSmoothedRawIsMarchingCubesAndNoneHasDegenerateTrian
 
 TEST(CtsurgSurface, ExportsGlbStlObjPly) {
   TempDir dir;
-  const fs::path grid = write_grid(dir, "g.h5");
+  const fs::path grid = write_surface_grid(dir, "g.h5");
   for (const std::string name : {"s.glb", "s.stl", "s.obj", "s.ply", "s.gltf"}) {
     const auto r = run_tool("ctsurg-surface", {grid.string(), (dir / name).string()});
     ASSERT_EQ(r.exit_code, 0) << name << ": " << r.output;
@@ -283,11 +283,11 @@ TEST(CtsurgSurface, GltfIsInMetresWithSuperiorUpAndAnteriorToTheFront) {
 // same way), and the normals are unit.
 TEST(CtsurgSurface, GltfNormalsAndWindingFaceOutward) {
   TempDir dir;
-  const fs::path grid = write_grid(dir, "g.h5");
+  const fs::path grid = write_surface_grid(dir, "g.h5");
   for (const std::string name : {"s.glb", "s.gltf"}) {
     ASSERT_EQ(run_tool("ctsurg-surface", {grid.string(), (dir / name).string()}).exit_code, 0) << name;
   }
-  // write_grid's centre, LPS mm: origin + 2 mm * (8.4, 8.1, 7.6); in glTF metres (x, z, -y) / 1000.
+  // write_surface_grid's centre, LPS mm: origin + 2 mm * (8.4, 8.1, 7.6); in glTF metres (x, z, -y) / 1000.
   const Eigen::Vector3d lps(-17.0 + 16.8, -16.0 + 16.2, 85.0 + 15.2);
   const Eigen::Vector3d centre = Eigen::Vector3d(lps.x(), lps.z(), -lps.y()) / 1000.0;
   for (const std::string name : {"s.glb", "s.gltf"}) {
@@ -304,7 +304,7 @@ TEST(CtsurgSurface, GltfNormalsAndWindingFaceOutward) {
     for (std::size_t v = 0; v < p.size() / 3; ++v) {
       EXPECT_NEAR(at(n, v).norm(), 1.0, 1e-4) << name << " vertex " << v;
       // Within 1 mm of the 12 mm sphere: metres.
-      EXPECT_NEAR((at(p, v) - centre).norm(), kRadiusMm / 1000.0, 1e-3) << name << " vertex " << v;
+      EXPECT_NEAR((at(p, v) - centre).norm(), kSurfaceRadiusMm / 1000.0, 1e-3) << name << " vertex " << v;
       inward_normals += at(n, v).dot(at(p, v) - centre) <= 0.0;
     }
     for (std::size_t f = 0; f + 2 < tri.size(); f += 3) {
@@ -320,7 +320,7 @@ TEST(CtsurgSurface, GltfNormalsAndWindingFaceOutward) {
 // python3-vtk9 is installed.
 TEST(CtsurgSurface, ExportsVtkAndVtpWithTheLpsMarker) {
   TempDir dir;
-  const fs::path grid = write_grid(dir, "g.h5");
+  const fs::path grid = write_surface_grid(dir, "g.h5");
   ASSERT_EQ(run_tool("ctsurg-surface", {grid.string(), (dir / "s.h5").string()}).exit_code, 0);
   const auto mesh = ctsurg::read_surface_mesh_file(dir / "s.h5");
   for (const std::string name : {"s.vtk", "s.vtp"}) {
@@ -361,7 +361,7 @@ TEST(CtsurgSurface, ExportsVtkAndVtpWithTheLpsMarker) {
 
 TEST(CtsurgSurface, RerunIsByteIdentical) {
   TempDir dir;
-  const fs::path grid = write_grid(dir, "g.h5");
+  const fs::path grid = write_surface_grid(dir, "g.h5");
   const std::vector<std::string> args = {grid.string(), (dir / "s.h5").string(), "--threads", "1"};
   ASSERT_EQ(run_tool("ctsurg-surface", args).exit_code, 0);
   const std::string h5 = read_bytes(dir / "s.h5"), xdmf = read_bytes(dir / "s.xdmf");
@@ -419,7 +419,7 @@ TEST(CtsurgSurface, ClosesTheSurfaceAtTheLatticeBorderUnlessAskedNotTo) {
 // recomputed so that the weights reproduce the moved vertices.
 TEST(CtsurgSurface, SmoothedAndDecimatedSurfaceStaysClosedAndTied) {
   TempDir dir;
-  const fs::path grid = write_grid(dir, "g.h5");
+  const fs::path grid = write_surface_grid(dir, "g.h5");
   ASSERT_EQ(run_tool("ctsurg-surface", {grid.string(), (dir / "full.h5").string()}).exit_code, 0);
   const auto r = run_tool("ctsurg-surface", {grid.string(), (dir / "s.h5").string(), "--smooth", "10", "--decimate", "400"});
   ASSERT_EQ(r.exit_code, 0) << r.output;
@@ -429,7 +429,7 @@ TEST(CtsurgSurface, SmoothedAndDecimatedSurfaceStaysClosedAndTied) {
   EXPECT_EQ(degenerate(m), "");
   EXPECT_LE(m.triangle_count(), 402);
   EXPECT_LT(m.triangle_count(), full.triangle_count() / 2);
-  const double ball = 4.0 / 3.0 * std::numbers::pi * std::pow(kRadiusMm, 3);
+  const double ball = 4.0 / 3.0 * std::numbers::pi * std::pow(kSurfaceRadiusMm, 3);
   EXPECT_NEAR(enclosed_volume(m), ball, 0.05 * ball);
   ASSERT_EQ(m.grid_weights.size(), 8 * static_cast<std::size_t>(m.vertex_count()));
   for (int64_t v = 0; v < m.vertex_count(); ++v) {
@@ -445,8 +445,8 @@ TEST(CtsurgSurface, SmoothedAndDecimatedSurfaceStaysClosedAndTied) {
 
 TEST(CtsurgSurface, BadInputExitsTwoAndLeavesNoFile) {
   TempDir dir;
-  const fs::path grid = write_grid(dir, "g.h5");
-  const fs::path empty = write_grid(dir, "empty.h5", true);
+  const fs::path grid = write_surface_grid(dir, "g.h5");
+  const fs::path empty = write_surface_grid(dir, "empty.h5", true);
   const auto expect_bad = [&](const std::vector<std::string>& args, const std::string& says) {
     const auto before = ctsurg::test::files_in(dir.path());
     const auto r = run_tool("ctsurg-surface", args);
@@ -507,7 +507,7 @@ TEST(CtsurgSurface, ANanVoxelIsRefusedWhereItEnters) {
 // the previous file (Assimp's file I/O drops write errors). Here a 4 KiB file-size limit.
 TEST(CtsurgSurface, AFullDiskKeepsThePreviousMeshFile) {
   TempDir dir;
-  const fs::path grid = write_grid(dir, "g.h5");
+  const fs::path grid = write_surface_grid(dir, "g.h5");
   for (const char* name : {"s.stl", "s.obj", "s.ply", "s.glb", "s.gltf"}) {
     std::ofstream(dir / name) << "previous";
     const auto r = ctsurg::test::run_shell("trap '' XFSZ; ulimit -f 4; CTSURG_NO_PROGRESS=1 " + std::string(CTSURG_TOOL_DIR) +

@@ -19,12 +19,12 @@ using ctsurg::test::TempDir;
 
 namespace {
 
-constexpr double kRadiusMm = 8.0;
+constexpr double kTetRadiusMm = 8.0;
 
 using ctsurg::test::test_provenance;
 
 // A ball of radius 8 mm: the mask on 1 mm voxels, the grid on 2 mm cells; `empty` gives no tissue.
-fs::path write_grid(const TempDir& dir, const std::string& name, bool empty = false) {
+fs::path write_tet_grid(const TempDir& dir, const std::string& name, bool empty = false) {
   ctsurg::ImageGeometry mg;
   mg.dims = {22, 21, 20};
   mg.origin = Eigen::Vector3d(-17.0, -16.0, 85.0);
@@ -41,11 +41,11 @@ fs::path write_grid(const TempDir& dir, const std::string& name, bool empty = fa
   for (int64_t k = 0; k < mg.dims[2] && !empty; ++k)
     for (int64_t j = 0; j < mg.dims[1]; ++j)
       for (int64_t i = 0; i < mg.dims[0]; ++i)
-        grid.mask(i, j, k) = (mg.index_to_world(Eigen::Vector3d(double(i), double(j), double(k))) - centre).norm() <= kRadiusMm;
+        grid.mask(i, j, k) = (mg.index_to_world(Eigen::Vector3d(double(i), double(j), double(k))) - centre).norm() <= kTetRadiusMm;
   for (int64_t k = 0; k < gg.dims[2] && !empty; ++k)
     for (int64_t j = 0; j < gg.dims[1]; ++j)
       for (int64_t i = 0; i < gg.dims[0]; ++i) {
-        const bool in = (gg.index_to_world(Eigen::Vector3d(double(i), double(j), double(k))) - centre).norm() <= kRadiusMm;
+        const bool in = (gg.index_to_world(Eigen::Vector3d(double(i), double(j), double(k))) - centre).norm() <= kTetRadiusMm;
         grid.fraction(i, j, k) = in ? 1.0f : 0.0f;
         grid.occupancy(i, j, k) = in;
         grid.label(i, j, k) = in;
@@ -58,11 +58,11 @@ fs::path write_grid(const TempDir& dir, const std::string& name, bool empty = fa
 
 using ctsurg::test::read_bytes;
 
-const double kBall = 4.0 / 3.0 * std::numbers::pi * std::pow(kRadiusMm, 3);
+const double kBall = 4.0 / 3.0 * std::numbers::pi * std::pow(kTetRadiusMm, 3);
 
 TEST(CtsurgTetmesh, GridToTetMeshFileWithQualityReport) {
   TempDir dir;
-  const fs::path grid = write_grid(dir, "ball_grid.h5");
+  const fs::path grid = write_tet_grid(dir, "ball_grid.h5");
   const auto r = run_tool("ctsurg-tetmesh", {grid.string(), (dir / "ball.h5").string(), "--cell-size", "3", "--facet-size",
                                              "1.5", "--facet-distance", "0.3"});
   ASSERT_EQ(r.exit_code, 0) << r.output;
@@ -94,7 +94,7 @@ TEST(CtsurgTetmesh, GridToTetMeshFileWithQualityReport) {
 
 TEST(CtsurgTetmesh, ExportsVtuMshMesh) {
   TempDir dir;
-  const fs::path grid = write_grid(dir, "g.h5");
+  const fs::path grid = write_tet_grid(dir, "g.h5");
   for (const std::string name : {"m.vtu", "m.msh", "m.mesh"}) {
     const auto r = run_tool("ctsurg-tetmesh", {grid.string(), (dir / name).string(), "--cell-size", "3"});
     ASSERT_EQ(r.exit_code, 0) << name << ": " << r.output;
@@ -138,7 +138,7 @@ TEST(CtsurgTetmesh, ImportsAnotherMeshersFile) {
 
 TEST(CtsurgTetmesh, RerunIsByteIdentical) {
   TempDir dir;
-  const fs::path grid = write_grid(dir, "g.h5");
+  const fs::path grid = write_tet_grid(dir, "g.h5");
   const std::vector<std::string> args = {grid.string(), (dir / "s.h5").string(), "--cell-size", "3"};
   ASSERT_EQ(run_tool("ctsurg-tetmesh", args).exit_code, 0);
   const std::string h5 = read_bytes(dir / "s.h5"), xdmf = read_bytes(dir / "s.xdmf");
@@ -154,8 +154,8 @@ TEST(CtsurgTetmesh, RerunIsByteIdentical) {
 
 TEST(CtsurgTetmesh, BadInputExitsTwoAndLeavesNoFile) {
   TempDir dir;
-  const fs::path grid = write_grid(dir, "g.h5");
-  const fs::path empty = write_grid(dir, "empty.h5", true);
+  const fs::path grid = write_tet_grid(dir, "g.h5");
+  const fs::path empty = write_tet_grid(dir, "empty.h5", true);
   const auto expect_bad = [&](const std::vector<std::string>& args, const std::string& says) {
     const auto before = ctsurg::test::files_in(dir.path());
     const auto r = run_tool("ctsurg-tetmesh", args);

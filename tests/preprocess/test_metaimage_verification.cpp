@@ -18,7 +18,7 @@ using namespace ctsurg;
 
 namespace {
 
-void expect_refused(const fs::path& path, const std::string& field, const std::string& mention = "") {
+void expect_mha_refused(const fs::path& path, const std::string& field, const std::string& mention = "") {
   test::expect_refused(path, [](const fs::path& p) { verify_metaimage_file(p, false); }, field, mention, true);
 }
 
@@ -58,20 +58,20 @@ TEST(MetaImageVerification, WellFormedFilesPass) {
 TEST(MetaImageVerification, ShortOrDamagedDataIsRefused) {
   test::TempDir tmp;
   std::ofstream(tmp / "short.mha", std::ios::binary) << kHeader << "ElementDataFile = LOCAL\n" << floats(20);
-  expect_refused(tmp / "short.mha", "ElementDataFile", "cut short");
+  expect_mha_refused(tmp / "short.mha", "ElementDataFile", "cut short");
   test::write_mhd(tmp.path(), "shortraw", 3, 3, 3, std::vector<float>(26, 40.0f));
-  expect_refused(tmp / "shortraw.mhd", "ElementDataFile", "cut short");
+  expect_mha_refused(tmp / "shortraw.mhd", "ElementDataFile", "cut short");
   std::string z = deflated(floats(27));
   std::string bad = z;
   bad[z.size() / 2] = static_cast<char>(bad[z.size() / 2] ^ 0x20);
   std::ofstream(tmp / "bad.mha", std::ios::binary) << kHeader << "CompressedData = True\nElementDataFile = LOCAL\n" << bad;
-  expect_refused(tmp / "bad.mha", "CompressedData");
+  expect_mha_refused(tmp / "bad.mha", "CompressedData");
   std::ofstream(tmp / "cutz.mha", std::ios::binary) << kHeader << "CompressedData = True\nElementDataFile = LOCAL\n"
                                                      << z.substr(0, z.size() / 2);
-  expect_refused(tmp / "cutz.mha", "CompressedData", "cut short");
+  expect_mha_refused(tmp / "cutz.mha", "CompressedData", "cut short");
   std::ofstream(tmp / "size.mha", std::ios::binary) << kHeader << "CompressedData = True\nCompressedDataSize = "
                                                      << z.size() + 100 << "\nElementDataFile = LOCAL\n" << z;
-  expect_refused(tmp / "size.mha", "CompressedDataSize");
+  expect_mha_refused(tmp / "size.mha", "CompressedDataSize");
 }
 
 // Issue 17: ElementDataFile could point anywhere on the disk.
@@ -82,12 +82,12 @@ TEST(MetaImageVerification, DataFilesMustLieBesideTheHeader) {
   for (const std::string& name :
        {(elsewhere / "secret.raw").string(), std::string("../../") + elsewhere.path().filename().string() + "/secret.raw"}) {
     std::ofstream(tmp / "sub" / "x.mhd") << kHeader << "ElementDataFile = " << name << "\n";
-    expect_refused(tmp / "sub" / "x.mhd", "ElementDataFile", "--allow-data-outside");
+    expect_mha_refused(tmp / "sub" / "x.mhd", "ElementDataFile", "--allow-data-outside");
     EXPECT_NO_THROW(verify_metaimage_file(tmp / "sub" / "x.mhd", true)) << "allowed by the flag";
   }
   fs::create_symlink(elsewhere / "secret.raw", tmp / "sub" / "link.raw");
   std::ofstream(tmp / "sub" / "x.mhd") << kHeader << "ElementDataFile = link.raw\n";
-  expect_refused(tmp / "sub" / "x.mhd", "ElementDataFile", "outside");
+  expect_mha_refused(tmp / "sub" / "x.mhd", "ElementDataFile", "outside");
 }
 
 // Issue 17: DimSize 2^32 overflowed the voxel count (segfault); NDims 1,000,000 hung.
@@ -98,17 +98,17 @@ TEST(MetaImageVerification, AbsurdHeadersAreRefusedAtOnce) {
     std::ofstream(tmp / "h.raw") << "xx";
     return tmp / "h.mhd";
   };
-  expect_refused(header("NDims = 3\nDimSize = 4294967296 4294967296 4294967296\n"), "DimSize");
-  expect_refused(header("NDims = 3\nDimSize = 65537 65536 65536\n"), "DimSize", "2^48");
-  expect_refused(header("NDims = 1000000\nDimSize = 1 1 1\n"), "NDims");
-  expect_refused(header("NDims = 3\nDimSize = 3 3\n"), "DimSize");
-  expect_refused(header("NDims = 3\nDimSize = 3 3 0\n"), "DimSize");
+  expect_mha_refused(header("NDims = 3\nDimSize = 4294967296 4294967296 4294967296\n"), "DimSize");
+  expect_mha_refused(header("NDims = 3\nDimSize = 65537 65536 65536\n"), "DimSize", "2^48");
+  expect_mha_refused(header("NDims = 1000000\nDimSize = 1 1 1\n"), "NDims");
+  expect_mha_refused(header("NDims = 3\nDimSize = 3 3\n"), "DimSize");
+  expect_mha_refused(header("NDims = 3\nDimSize = 3 3 0\n"), "DimSize");
   std::ofstream(tmp / "t.mhd") << kHeader.substr(0, kHeader.find("ElementType")) << "ElementType = MET_FLOAT_ARRAY\nElementDataFile = t.raw\n";
-  expect_refused(tmp / "t.mhd", "ElementType");
+  expect_mha_refused(tmp / "t.mhd", "ElementType");
   std::ofstream(tmp / "p.mhd") << kHeader << "ElementDataFile = slice%s.raw 1 3 1\n";
-  expect_refused(tmp / "p.mhd", "ElementDataFile", "%d");
+  expect_mha_refused(tmp / "p.mhd", "ElementDataFile", "%d");
   std::ofstream(tmp / "many.mhd") << kHeader << "ElementDataFile = s%d.raw 0 2000000000 1\n";
-  expect_refused(tmp / "many.mhd", "ElementDataFile", "million");
+  expect_mha_refused(tmp / "many.mhd", "ElementDataFile", "million");
 }
 
 // tests/fuzz_regressions/README.md: an ObjectType of 259 characters overflowed MetaIO's char[255] in
@@ -118,13 +118,13 @@ TEST(MetaImageVerification, HeaderValuesLongerThanMetaIOsBuffersAreRefused) {
   test::TempDir tmp;
   const auto finding = tmp / "finding.mha";  // the reader goes by the extension
   fs::copy_file(test::source_dir() / "tests" / "fuzz_regressions" / "fuzz_metaimage" / "crash-a7ee1548", finding);
-  expect_refused(finding, "ObjectType", "at most 254");
+  expect_mha_refused(finding, "ObjectType", "at most 254");
   EXPECT_THROW(read_image_file(finding), InputError);
   const std::string long_value(255, 'x');
   std::ofstream(tmp / "c.mha") << "Comment = " << long_value << "\n" << kHeader << "ElementDataFile = LOCAL\n" << floats(27);
-  expect_refused(tmp / "c.mha", "Comment", "255 characters");
+  expect_mha_refused(tmp / "c.mha", "Comment", "255 characters");
   std::ofstream(tmp / "k.mha") << long_value << " = 1\n" << kHeader << "ElementDataFile = LOCAL\n" << floats(27);
-  expect_refused(tmp / "k.mha", "header", "key of 255");
+  expect_mha_refused(tmp / "k.mha", "header", "key of 255");
   std::ofstream(tmp / "ok.mha") << "Comment = " << long_value.substr(0, 254) << "\n" << kHeader << "ElementDataFile = LOCAL\n" << floats(27);
   EXPECT_NO_THROW(verify_metaimage_file(tmp / "ok.mha", false)) << "254 characters fit";
 }

@@ -20,7 +20,7 @@ using namespace ctsurg;
 
 namespace {
 
-void expect_refused(const fs::path& path, const std::string& field, const std::string& mention = "") {
+void expect_nifti_refused(const fs::path& path, const std::string& field, const std::string& mention = "") {
   test::expect_refused(path, [](const fs::path& p) { verify_nifti_file(p); }, field, mention);
 }
 
@@ -47,9 +47,9 @@ TEST(NiftiVerification, ACutFileIsRefused) {
   const std::string bytes = test::nifti_bytes({});
   for (const char* name : {"cut.nii", "cut.nii.gz"}) {
     test::write_nifti_bytes(tmp / name, bytes.substr(0, 352 + (bytes.size() - 352) / 2));
-    expect_refused(tmp / name, "voxel data", "cut short");
+    expect_nifti_refused(tmp / name, "voxel data", "cut short");
     test::write_nifti_bytes(tmp / name, bytes.substr(0, 200));
-    expect_refused(tmp / name, "header");
+    expect_nifti_refused(tmp / name, "header");
   }
 }
 
@@ -62,7 +62,7 @@ TEST(NiftiVerification, AGzipCrcOrLengthMismatchIsRefused) {
     std::string bad = gz;
     bad[bad.size() - from_end] = static_cast<char>(bad[bad.size() - from_end] ^ 0x01);
     { std::ofstream(tmp / "bad.nii.gz", std::ios::binary) << bad; }
-    expect_refused(tmp / "bad.nii.gz", "gzip");
+    expect_nifti_refused(tmp / "bad.nii.gz", "gzip");
   }
   // A flipped bit in the compressed data: refused (a decode error or a CRC mismatch), or, where the
   // bit does not change the decoded bytes (a code length of an unused symbol), the same image.
@@ -89,7 +89,7 @@ TEST(NiftiVerification, NonFiniteVoxelsAreRefusedByPosition) {
     s.values.assign(24, 1.0f);
     s.values[1 + 4 * (2 + 3 * 1)] = bad;  // voxel (1, 2, 1)
     test::write_nifti(tmp / "nan.nii.gz", s);
-    expect_refused(tmp / "nan.nii.gz", "voxel data", "(1, 2, 1)");
+    expect_nifti_refused(tmp / "nan.nii.gz", "voxel data", "(1, 2, 1)");
   }
 }
 
@@ -98,7 +98,7 @@ TEST(NiftiVerification, NonFiniteVoxelsAreRefusedByPosition) {
 TEST(NiftiVerification, BrokenHeaderFieldsAreRefusedByName) {
   test::TempDir tmp;
   const auto refused = [&](const test::NiftiSpec& s, const std::string& field) {
-    expect_refused(test::write_nifti(tmp / "h.nii", s), field);
+    expect_nifti_refused(test::write_nifti(tmp / "h.nii", s), field);
   };
   for (const float v : {0.0f, -1.5f, std::nanf("")}) {
     test::NiftiSpec s;

@@ -267,11 +267,15 @@ TEST(CtsurgRender, WritesTrajectoriesAndTurntablesAsMp4AndGif) {
       const Probe p = ffprobe(video);
       const bool mp4 = suffix == ".mp4";
       EXPECT_EQ(p.codec, mp4 ? "h264" : "gif") << c.name << suffix << ": " << p.raw;
-      if (mp4) EXPECT_EQ(p.pix_fmt, "yuv420p") << c.name << ": " << p.raw;
+      if (mp4) {
+        EXPECT_EQ(p.pix_fmt, "yuv420p") << c.name << ": " << p.raw;
+      }
       EXPECT_EQ(p.width, mp4 ? (c.width + 1) / 2 * 2 : c.width) << c.name << suffix << ": " << p.raw;
       EXPECT_EQ(p.height, mp4 ? (c.height + 1) / 2 * 2 : c.height) << c.name << suffix << ": " << p.raw;
       EXPECT_EQ(p.frames, c.frames) << c.name << suffix << ": " << p.raw;
-      if (mp4) EXPECT_EQ(p.frame_rate, c.frame_rate) << c.name << ": " << p.raw;
+      if (mp4) {
+        EXPECT_EQ(p.frame_rate, c.frame_rate) << c.name << ": " << p.raw;
+      }
     }
   }
 }

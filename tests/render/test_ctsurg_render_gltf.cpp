@@ -15,10 +15,10 @@ using ctsurg::test::run_tool;
 
 namespace {
 
-struct Inputs {
+struct GltfInputs {
   ctsurg::test::TempDir dir;
   fs::path surface, cut, out;
-  Inputs() {
+  GltfInputs() {
     const ctsurg::SurfaceMesh s = ctsurg::test::bumpy_organ_surface(24, 12, 64);
     surface = dir / "organ.h5";
     ctsurg::write_surface_mesh_file(surface, s, ctsurg::test::test_provenance());
@@ -39,7 +39,7 @@ std::vector<float> weight_keys(const ctsurg::test::GltfFile& g) {
 }  // namespace
 
 TEST(CtsurgRenderGltf, WritesTheGltfAndThePageWithThePicturesOrAlone) {
-  Inputs in;
+  GltfInputs in;
   // Pictures (the last frame, their default), the whole trajectory as .glb and as .gltf, and the page.
   auto r = run_tool("ctsurg-render", {"-s", in.surface.string(), "-t", in.cut.string(), "--size", "48", "-o",
                                       (in.out / "last.png").string(), "--gltf", (in.out / "cut.glb").string(), "--viewer",
@@ -72,7 +72,7 @@ TEST(CtsurgRenderGltf, WritesTheGltfAndThePageWithThePicturesOrAlone) {
 }
 
 TEST(CtsurgRenderGltf, BadUsageExitsTwoAndWritesNothing) {
-  Inputs in;
+  GltfInputs in;
   const std::string s = in.surface.string(), t = in.cut.string();
   struct Case {
     std::vector<std::string> args;

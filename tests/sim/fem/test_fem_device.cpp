@@ -11,7 +11,7 @@
 // kStepUlps float ulps of the largest displacement. Neo-Hookean calls logf (ln J), which CUDA's and
 // glibc's libraries may round differently by an ulp; that difference enters every element's stress
 // and accumulates over the compared steps, so its allowance is kNeoHookeanStepUlps. Over 1,000 steps
-// (gravity, a moving grab, a contact sphere, mass damping) the run is checked to kRunTolerance mm,
+// (gravity, a moving grab, a contact sphere, mass damping) the run is checked to kFemRunTolerance mm,
 // 0.05% of the 2 mm cell, as the spring-model device tests do.
 //
 // Tolerances of the static solve. The device CG is Eigen's iteration in double (device_conjugate_
@@ -43,7 +43,7 @@ using test::max_abs_difference;
 
 constexpr double kStepUlps = 4;
 constexpr double kNeoHookeanStepUlps = 32;
-constexpr double kRunTolerance = 1e-3;  // mm
+constexpr double kFemRunTolerance = 1e-3;  // mm
 constexpr double kStaticRelative = 1e-8;
 constexpr int kCgIterationSlack = 3;    // or 3 % of the CPU's count, whichever is larger
 
@@ -138,7 +138,7 @@ TEST_F(FemDeviceTest, ThousandStepsWithGravityGrabAndSphereMatchTheCpu) {
     run_with_tools(again, m);
     EXPECT_EQ(gpu.steps_taken(), 1000);
     EXPECT_EQ(gpu.time(), cpu.time());
-    EXPECT_LE(max_abs_difference(cpu.displacements(), gpu.displacements()), kRunTolerance) << name(material);
+    EXPECT_LE(max_abs_difference(cpu.displacements(), gpu.displacements()), kFemRunTolerance) << name(material);
     EXPECT_GT(cpu.contacts(), 0) << name(material);
     // A node on the sphere's surface is inside or not by its last bits: allow a couple to differ.
     EXPECT_LE(std::abs(gpu.contacts() - cpu.contacts()), 2) << name(material);

@@ -19,10 +19,10 @@
 namespace ctsurg::sim {
 namespace {
 
-const std::array<int, 3> kCells{8, 8, 4};
-const std::array<double, 3> kSize{16, 16, 8};
+const std::array<int, 3> kRegionCells{8, 8, 4};
+const std::array<double, 3> kRegionSize{16, 16, 8};
 
-FemModel block(FemLaw law = FemLaw::neo_hookean) { return test::fem_box_model(law, kCells, kSize); }
+FemModel block(FemLaw law = FemLaw::neo_hookean) { return test::fem_box_model(law, kRegionCells, kRegionSize); }
 
 FemBoundaryConditions base_fixed(const FemModel& m) {
   FemBoundaryConditions bc;
@@ -324,7 +324,7 @@ TEST(FemLocalRegion, BadInputIsRefusedWithTheField) {
   dynamic.solver = FemSolver::implicit;
   EXPECT_NE(engine_field(dynamic, m, base_fixed(m)).find("needs solver: static"), std::string::npos);
   {
-    const FemBoxMesh box = fem_box_mesh(kCells, kSize);
+    const FemBoxMesh box = fem_box_mesh(kRegionCells, kRegionSize);
     FemModel q = build_quadratic_fem_model(box.nodes, box.tets, test::fem_material(FemLaw::neo_hookean));
     FemBoundaryConditions s = base_fixed(q);
     EXPECT_NE(engine_field(local_options(5), std::move(q), s).find("linear (4-node) tets"), std::string::npos);

@@ -261,7 +261,9 @@ TEST(FemLaws, EveryLawIsConsistentWithItsEnergyTangentAndTraits) {
     const M9 inverted{-1, 0, 0, 0, 1, 0, 0, 0, 1};
     EXPECT_FALSE(first_piola_kirchhoff(k, inverted, P));
     for (double v : P) EXPECT_EQ(v, 0);
-    if (fem_law_traits(k.law).needs_positive_j) EXPECT_TRUE(std::isinf(strain_energy_density(k, inverted)));
+    if (fem_law_traits(k.law).needs_positive_j) {
+      EXPECT_TRUE(std::isinf(strain_energy_density(k, inverted)));
+    }
   }
 }
 

@@ -47,7 +47,7 @@ namespace {
 
 // The bar of tests/sim/test_scenario_run.cpp: 16 x 4 x 4 cells of 2 mm (solid x 11..43, y -19..-11,
 // z 31..39 mm), as grid, surface and (8 x 2 x 2 cells of 4 mm, Kuhn tets) tet mesh files in `dir`.
-void write_bar(const fs::path& dir) {
+void write_stress_bar(const fs::path& dir) {
   ctsurg::sim::test::write_block_files(dir, 16, 4, 4, 2.0);
   ctsurg::sim::test::write_bar_tet_mesh(dir);
 }
@@ -193,7 +193,7 @@ TEST(Stress, StiffnessRatio1000BetweenTissues) {
 // nu (their lattice has nu = 0.25, docs/sim.md) and must still run.
 TEST(Stress, NearIncompressibleNu049) {
   TempDir dir;
-  write_bar(dir.path());
+  write_stress_bar(dir.path());
   const std::string grab =
       "tools:\n  - grab:\n      radius_mm: 4.5\n      path:\n        - {t: 0.0, position_mm: [43, -15, 35]}\n"
       "        - {t: 0.04, offset_mm: [6, 0, 0]}\n";  // stretch the bar 6 mm along its axis
@@ -223,7 +223,7 @@ TEST(Stress, NearIncompressibleNu049) {
 // A grab pulled 16 mm (50 % of the 32 mm bar) sideways in one second, on every dynamic model.
 TEST(Stress, GrabPulledHalfTheOrganSizeInOneSecond) {
   TempDir dir;
-  write_bar(dir.path());
+  write_stress_bar(dir.path());
   const std::string grab =
       "tools:\n  - grab:\n      radius_mm: 4.5\n      path:\n        - {t: 0.0, position_mm: [43, -15, 35]}\n"
       "        - {t: 1.0, offset_mm: [0, -16, 0]}\n";
@@ -247,7 +247,7 @@ TEST(Stress, GrabPulledHalfTheOrganSizeInOneSecond) {
 // A probe (3 mm) driven through the 8 mm bar from above to below in 0.1 s, then held below it.
 TEST(Stress, ProbeDrivenThroughTheWall) {
   TempDir dir;
-  write_bar(dir.path());
+  write_stress_bar(dir.path());
   const std::string probe =
       "tools:\n  - probe:\n      radius_mm: 3\n      path:\n        - {t: 0.0, position_mm: [35, -15, 43]}\n"
       "        - {t: 0.1, position_mm: [35, -15, 26]}\n";
@@ -268,7 +268,7 @@ TEST(Stress, ProbeDrivenThroughTheWall) {
 // ignores it and it falls freely, finite.
 TEST(Stress, CutsIsolatingFreeFloatingFragments) {
   TempDir dir;
-  write_bar(dir.path());
+  write_stress_bar(dir.path());
   // Blades of 20 mm edge along z swept along y through the whole bar at x = 23 and x = 33 mm (between
   // cell centres), in the first 0.02 s; the end beyond x = 33 is held by a grab so only the middle floats.
   const std::string tools =

@@ -100,12 +100,12 @@ TEST(ParticleRemoval, BadInputIsRefused) {
 }
 
 // The bar fixed at its x = 12 end, with its surface (close_cuts on).
-SpringEngine bar_engine() { return test::liver_block_engine(10, 3, 3, 12.5); }
+SpringEngine removal_bar_engine() { return test::liver_block_engine(10, 3, 3, 12.5); }
 
 ToolInput cautery(const Vec3& centre, double rate, bool active = true) { return test::cautery_input(centre, 2.5, rate, active); }
 
 TEST(SpringEngineCautery, RemovesAtItsRateCountsTheVolumeAndClosesTheCrater) {
-  SpringEngine e = bar_engine();
+  SpringEngine e = removal_bar_engine();
   const size_t triangles = e.triangles().size();
   const auto& model = std::get<SpringGridModel>(e.model());
   const int32_t end = model.particle_at(10, 2, 2);
@@ -134,7 +134,7 @@ TEST(SpringEngineCautery, RemovesAtItsRateCountsTheVolumeAndClosesTheCrater) {
 }
 
 TEST(SpringEngineCautery, RestartGivesBackWhatWasRemoved) {
-  SpringEngine e = bar_engine();
+  SpringEngine e = removal_bar_engine();
   const double rate = 2.2 * 8.0 / e.dt();  // 2.2 cells a step: two go
   e.save_checkpoint();
   ASSERT_TRUE(e.step({cautery({30.1, -16, 34}, rate)}, 1).stable);

@@ -164,8 +164,12 @@ TEST(MaterialPresets, NamedPresetsAndBadMaterials) {
   EXPECT_EQ(material_presets().size(), 7u);
   // The stiff inclusion is stiffer than every organ's parenchyma; fat is the softest.
   for (const Material& m : material_presets()) {
-    if (m.name != "tumour" && m.name != "vessel_wall") EXPECT_LT(m.youngs_modulus_pa, material_preset("tumour").youngs_modulus_pa) << m.name;
-    if (m.name != "fat") EXPECT_GT(m.youngs_modulus_pa, material_preset("fat").youngs_modulus_pa) << m.name;
+    if (m.name != "tumour" && m.name != "vessel_wall") {
+      EXPECT_LT(m.youngs_modulus_pa, material_preset("tumour").youngs_modulus_pa) << m.name;
+    }
+    if (m.name != "fat") {
+      EXPECT_GT(m.youngs_modulus_pa, material_preset("fat").youngs_modulus_pa) << m.name;
+    }
     EXPECT_FALSE(m.source.empty()) << m.name;
     EXPECT_NO_THROW(validate_material(m)) << m.name;
   }
