@@ -176,27 +176,6 @@ GLuint link(const char* vs, const char* fs) {
   return p;
 }
 
-// A buffer texture over a buffer object: the streamed per-vertex data.
-struct BufferTexture {
-  GLuint buffer = 0, texture = 0;
-  void create(GLenum format) {
-    glGenBuffers(1, &buffer);
-    glGenTextures(1, &texture);
-    glBindBuffer(GL_TEXTURE_BUFFER, buffer);
-    glBufferData(GL_TEXTURE_BUFFER, 16, nullptr, GL_STREAM_DRAW);
-    glBindTexture(GL_TEXTURE_BUFFER, texture);
-    glTexBuffer(GL_TEXTURE_BUFFER, format, buffer);
-  }
-  // Orphans the old storage (no wait on frames still being drawn) and uploads `bytes`.
-  void stream(const void* data, std::size_t bytes) {
-    glBindBuffer(GL_TEXTURE_BUFFER, buffer);
-    glBufferData(GL_TEXTURE_BUFFER, static_cast<GLsizeiptr>(bytes), data, GL_STREAM_DRAW);
-  }
-  void destroy() {
-    glDeleteTextures(1, &texture);
-    glDeleteBuffers(1, &buffer);
-  }
-};
 
 // The unit icosphere (two subdivisions, 320 triangles): positions double as normals.
 void icosphere(std::vector<float>& xyz, std::vector<uint32_t>& tri) {
@@ -230,6 +209,27 @@ void icosphere(std::vector<float>& xyz, std::vector<uint32_t>& tri) {
 }  // namespace
 
 struct SurfaceRenderer::State {
+  // A buffer texture over a buffer object: the streamed per-vertex data.
+  struct BufferTexture {
+    GLuint buffer = 0, texture = 0;
+    void create(GLenum format) {
+      glGenBuffers(1, &buffer);
+      glGenTextures(1, &texture);
+      glBindBuffer(GL_TEXTURE_BUFFER, buffer);
+      glBufferData(GL_TEXTURE_BUFFER, 16, nullptr, GL_STREAM_DRAW);
+      glBindTexture(GL_TEXTURE_BUFFER, texture);
+      glTexBuffer(GL_TEXTURE_BUFFER, format, buffer);
+    }
+    // Orphans the old storage (no wait on frames still being drawn) and uploads `bytes`.
+    void stream(const void* data, std::size_t bytes) {
+      glBindBuffer(GL_TEXTURE_BUFFER, buffer);
+      glBufferData(GL_TEXTURE_BUFFER, static_cast<GLsizeiptr>(bytes), data, GL_STREAM_DRAW);
+    }
+    void destroy() {
+      glDeleteTextures(1, &texture);
+      glDeleteBuffers(1, &buffer);
+    }
+  };
   OffscreenGlContext context;
   DeformedTangentFrames frames;
   int64_t vertex_count = 0;
@@ -447,7 +447,7 @@ void SurfaceRenderer::draw(const SceneFrame& frame, const Camera& camera, const 
 
   const GLuint p = s.surface_program;
   glUseProgram(p);
-  const auto bind_buffer_texture = [&](const char* name, int unit, const BufferTexture& b) {
+  const auto bind_buffer_texture = [&](const char* name, int unit, const State::BufferTexture& b) {
     glActiveTexture(GL_TEXTURE0 + unit);
     glBindTexture(GL_TEXTURE_BUFFER, b.texture);
     glUniform1i(glGetUniformLocation(p, name), unit);

@@ -51,7 +51,7 @@ fs::path write_ct(const TempDir& dir) {
 }
 
 // Labels: 2 in the ball's x < centre half, 3 in the other half.
-fs::path write_labels(const TempDir& dir, const ctsurg::ImageGeometry& g, const std::string& name) {
+fs::path write_grid_labels(const TempDir& dir, const ctsurg::ImageGeometry& g, const std::string& name) {
   ctsurg::HuVolume v;
   v.hu = ctsurg::Volume<float>(g, 0.0f);
   for (int64_t k = 0; k < g.dims[2]; ++k)
@@ -111,7 +111,7 @@ TEST(CtsurgGrid, RerunIsByteIdentical) {
 TEST(CtsurgGrid, MaskFileWithLabelsAndNames) {
   TempDir dir;
   const fs::path ct = write_ct(dir);
-  const fs::path labels = write_labels(dir, ct_geometry(), "labels.h5");
+  const fs::path labels = write_grid_labels(dir, ct_geometry(), "labels.h5");
   const auto r = run_tool("ctsurg-grid", {ct.string(), labels.string(), (dir / "k.h5").string(), "--labels", "3",
                                           "--label-names", "3=kidney_left", "--voxel-mm", "3", "--no-preview"});
   ASSERT_EQ(r.exit_code, 0) << r.output;
@@ -146,7 +146,7 @@ TEST(CtsurgGrid, CellsSmallerThanVoxelsWarnButWork) {
 TEST(CtsurgGrid, MaskInAnotherIndexOrderIsReorderedExactlyAndAShiftedOneWarns) {
   TempDir dir;
   const fs::path ct = write_ct(dir);
-  const auto reference = run_tool("ctsurg-grid", {ct.string(), write_labels(dir, ct_geometry(), "labels.h5").string(),
+  const auto reference = run_tool("ctsurg-grid", {ct.string(), write_grid_labels(dir, ct_geometry(), "labels.h5").string(),
                                                   (dir / "a.h5").string(), "--voxel-mm", "3", "--no-preview"});
   ASSERT_EQ(reference.exit_code, 0) << reference.output;
   // The same voxels stored with the rows flipped (as NIfTI exporters write DICOM-derived masks).
@@ -171,7 +171,7 @@ TEST(CtsurgGrid, MaskInAnotherIndexOrderIsReorderedExactlyAndAShiftedOneWarns) {
   // Half a voxel off: nearest neighbour with a warning that gives the distance.
   ctsurg::ImageGeometry half = ct_geometry();
   half.origin[0] += 0.75;
-  const auto w = run_tool("ctsurg-grid", {ct.string(), write_labels(dir, half, "half.h5").string(), (dir / "c.h5").string(),
+  const auto w = run_tool("ctsurg-grid", {ct.string(), write_grid_labels(dir, half, "half.h5").string(), (dir / "c.h5").string(),
                                           "--voxel-mm", "3", "--no-preview"});
   ASSERT_EQ(w.exit_code, 0) << w.output;
   EXPECT_NE(w.output.find("nearest neighbour, voxel centres up to 0.75 mm apart"), std::string::npos) << w.output;
@@ -250,8 +250,8 @@ TEST(CtsurgGrid, BadInputExitsTwoNamesTheProblemAndWritesNothing) {
   const fs::path ct = write_ct(dir);
   ctsurg::ImageGeometry shifted = ct_geometry();
   shifted.origin[0] += 1000.0;  // nowhere near the CT
-  const fs::path other = write_labels(dir, shifted, "shifted_labels.h5");
-  const fs::path labels = write_labels(dir, ct_geometry(), "labels.h5");
+  const fs::path other = write_grid_labels(dir, shifted, "shifted_labels.h5");
+  const fs::path labels = write_grid_labels(dir, ct_geometry(), "labels.h5");
   const auto before = ctsurg::test::files_in(dir.path());
   const std::string out = (dir / "out.h5").string();
   const std::vector<BadCase> cases = {

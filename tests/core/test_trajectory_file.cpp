@@ -60,7 +60,7 @@ void refused(const ctsurg::Trajectory& bad, const std::string& field) {
   }
 }
 
-std::string read_text(const fs::path& p) {
+std::string read_trajectory_text(const fs::path& p) {
   std::ifstream in(p);
   std::ostringstream s;
   s << in.rdbuf();
@@ -101,7 +101,7 @@ TEST(TrajectoryFile, RoundTripKeepsEveryArray) {
     EXPECT_EQ(r.frame_triangles(2).size(), 9u);
     EXPECT_FLOAT_EQ(r.frame_vertices(2)[2], 2.f);
     // The sidecar is a temporal collection with one grid per frame and the topology each frame uses.
-    const std::string x = read_text(dir.path() / "traj.xdmf");
+    const std::string x = read_trajectory_text(dir.path() / "traj.xdmf");
     EXPECT_NE(x.find("CollectionType=\"Temporal\""), std::string::npos);
     EXPECT_NE(x.find("<Time Value=\"0.02\"/>"), std::string::npos);
     EXPECT_NE(x.find("traj.h5:/trajectory/surface/topologies/1"), std::string::npos);
@@ -283,7 +283,7 @@ TEST(TrajectoryFile, VertexRegionRoundTripsAndIsChecked) {
   EXPECT_EQ(r.vertex_region, t.vertex_region);
   ASSERT_NE(r.frame_region(2), nullptr);
   EXPECT_EQ(r.frame_region(2)[2], 2);
-  const std::string x = read_text(dir.path() / "r.xdmf");
+  const std::string x = read_trajectory_text(dir.path() / "r.xdmf");
   EXPECT_NE(x.find("Name=\"local_region\""), std::string::npos);
   EXPECT_NE(x.find("r.h5:/trajectory/surface/vertex_region"), std::string::npos);
   // Without it (as every run without a local region, and files from before): empty, no attribute.
@@ -291,7 +291,7 @@ TEST(TrajectoryFile, VertexRegionRoundTripsAndIsChecked) {
   const auto none = ctsurg::read_trajectory_file(dir.path() / "none.h5");
   EXPECT_TRUE(none.vertex_region.empty());
   EXPECT_EQ(none.frame_region(0), nullptr);
-  EXPECT_EQ(read_text(dir.path() / "none.xdmf").find("local_region"), std::string::npos);
+  EXPECT_EQ(read_trajectory_text(dir.path() / "none.xdmf").find("local_region"), std::string::npos);
 
   auto bad = t;
   bad.vertex_region.pop_back();

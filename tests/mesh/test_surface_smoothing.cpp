@@ -96,13 +96,13 @@ ctsurg::Volume<float> pipeline_grid(const ctsurg::PhantomShape& shape, double fi
 
 // Vertex normals against the analytic normal at the vertex (degrees), and the vertices' distance to
 // the analytic surface (mm; the sphere's and torus's implicit functions are signed distances).
-struct Accuracy {
+struct SmoothingAccuracy {
   double mean_deg = 0.0, p95_deg = 0.0, max_deg = 0.0, mean_mm = 0.0, max_mm = 0.0;
 };
 
-Accuracy accuracy(const ctsurg::SurfaceMesh& m, const ctsurg::PhantomShape& shape) {
+SmoothingAccuracy accuracy(const ctsurg::SurfaceMesh& m, const ctsurg::PhantomShape& shape) {
   std::vector<double> angle;
-  Accuracy a;
+  SmoothingAccuracy a;
   for (int64_t v = 0; v < m.vertex_count(); ++v) {
     const auto i = static_cast<std::size_t>(v);
     const Eigen::Vector3d x = ctsurg::test::vertex(m, static_cast<uint32_t>(v));
@@ -174,15 +174,15 @@ TEST(WindowedSinc, RemovesThePipelineGridStaircaseAndRestoresTheVolume) {
     const double shrunk = ctsurg::enclosed_volume_mm3(sinc);
     const double offset = ctsurg::restore_enclosed_volume(sinc, v0);
     const auto row = [&](const char* name, const ctsurg::SurfaceMesh& m) {
-      const Accuracy a = accuracy(m, shape);
+      const SmoothingAccuracy a = accuracy(m, shape);
       std::printf("| %s | %s | %.2f / %.2f / %.2f | %.3f / %.3f | %+.2f %% |\n", ctsurg::phantom_kind_name(shape.kind), name,
                   a.mean_deg, a.p95_deg, a.max_deg, a.mean_mm, a.max_mm, 100.0 * (ctsurg::enclosed_volume_mm3(m) / V - 1.0));
       return a;
     };
-    const Accuracy g = row("raw MC, gradient normals", raw), f = row("raw MC, triangle normals", faces);
-    const Accuracy t = row("Taubin 20 + volume", taubin);
+    const SmoothingAccuracy g = row("raw MC, gradient normals", raw), f = row("raw MC, triangle normals", faces);
+    const SmoothingAccuracy t = row("Taubin 20 + volume", taubin);
     row("windowed sinc 20, pass band 0.1 + volume", vtk);
-    const Accuracy w = row("windowed sinc 20, pass band 0.01 + volume", sinc);
+    const SmoothingAccuracy w = row("windowed sinc 20, pass band 0.01 + volume", sinc);
     std::printf("| %s | windowed sinc before the restore: volume %+.3f %% of MC's, restored by a %+.4f mm offset |\n",
                 ctsurg::phantom_kind_name(shape.kind), 100.0 * (shrunk / v0 - 1.0), offset);
     EXPECT_EQ(ctsurg::test::manifold_problem(sinc), "");

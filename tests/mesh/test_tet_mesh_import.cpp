@@ -45,7 +45,7 @@ ctsurg::TetMesh cube() {
 
 void write_text(const fs::path& p, const std::string& s) { std::ofstream(p, std::ios::binary) << s; }
 
-std::string refusal(const fs::path& p) {
+std::string import_refusal(const fs::path& p) {
   try {
     ctsurg::import_tet_mesh(p);
   } catch (const ctsurg::InputError& e) {
@@ -129,28 +129,28 @@ TEST(TetMeshImport, BadFilesAreRefusedNamingFileAndElement) {
   TempDir dir;
   const std::string head = "MeshVersionFormatted 2\nDimension 3\nVertices\n5\n0 0 0 0\n1 0 0 0\n0 1 0 0\n0 0 1 0\n1 1 0 0\n";
   write_text(dir / "range.mesh", head + "Tetrahedra\n1\n1 2 3 9 1\nEnd\n");
-  EXPECT_NE(refusal(dir / "range.mesh").find("range.mesh: tet 1: node index 9 out of range [1, 5]"), std::string::npos)
-      << refusal(dir / "range.mesh");
+  EXPECT_NE(import_refusal(dir / "range.mesh").find("range.mesh: tet 1: node index 9 out of range [1, 5]"), std::string::npos)
+      << import_refusal(dir / "range.mesh");
   write_text(dir / "flat.mesh", head + "Tetrahedra\n2\n1 2 3 4 1\n1 2 3 5 1\nEnd\n");
-  EXPECT_NE(refusal(dir / "flat.mesh").find("flat.mesh: tet 2: zero volume"), std::string::npos) << refusal(dir / "flat.mesh");
+  EXPECT_NE(import_refusal(dir / "flat.mesh").find("flat.mesh: tet 2: zero volume"), std::string::npos) << import_refusal(dir / "flat.mesh");
   write_text(dir / "dup.mesh", head + "Tetrahedra\n2\n1 2 3 4 1\n2 1 3 4 2\nEnd\n");
-  EXPECT_NE(refusal(dir / "dup.mesh").find("dup.mesh: tet 2: the same four nodes as tet 1"), std::string::npos)
-      << refusal(dir / "dup.mesh");
+  EXPECT_NE(import_refusal(dir / "dup.mesh").find("dup.mesh: tet 2: the same four nodes as tet 1"), std::string::npos)
+      << import_refusal(dir / "dup.mesh");
   // tests/fuzz_regressions/README.md: a Medit file declaring 935,854,226 vertices in 637 bytes had
   // 22 GB reserved for them; a count the rest of the file cannot hold is refused first.
   fs::copy_file(ctsurg::test::source_dir() / "tests" / "fuzz_regressions" / "fuzz_medit" / "oom-0bd670f2", dir / "oom.mesh");
-  EXPECT_NE(refusal(dir / "oom.mesh").find("count 935854226 is more than the"), std::string::npos) << refusal(dir / "oom.mesh");
+  EXPECT_NE(import_refusal(dir / "oom.mesh").find("count 935854226 is more than the"), std::string::npos) << import_refusal(dir / "oom.mesh");
   write_text(dir / "label.mesh", head + "Tetrahedra\n1\n1 2 3 4 0\nEnd\n");
-  EXPECT_NE(refusal(dir / "label.mesh").find("label 0 is not in [1, 65535]"), std::string::npos);
+  EXPECT_NE(import_refusal(dir / "label.mesh").find("label 0 is not in [1, 65535]"), std::string::npos);
   write_text(dir / "short.mesh", head + "Tetrahedra\n2\n1 2 3 4 1\n");
-  EXPECT_NE(refusal(dir / "short.mesh").find("short.mesh: Tetrahedra row 2: the file ends early"), std::string::npos)
-      << refusal(dir / "short.mesh");
+  EXPECT_NE(import_refusal(dir / "short.mesh").find("short.mesh: Tetrahedra row 2: the file ends early"), std::string::npos)
+      << import_refusal(dir / "short.mesh");
   write_text(dir / "bin.msh", "$MeshFormat\n4.1 1 8\n$EndMeshFormat\n");
-  EXPECT_NE(refusal(dir / "bin.msh").find("binary MSH is not read"), std::string::npos);
+  EXPECT_NE(import_refusal(dir / "bin.msh").find("binary MSH is not read"), std::string::npos);
   write_text(dir / "b.vtu",
              "<VTKFile type=\"UnstructuredGrid\"><UnstructuredGrid><Piece NumberOfPoints=\"1\" NumberOfCells=\"0\">"
              "<Points><DataArray type=\"Float32\" NumberOfComponents=\"3\" format=\"appended\" offset=\"0\"/></Points>"
              "</Piece></UnstructuredGrid></VTKFile>");
-  EXPECT_NE(refusal(dir / "b.vtu").find("only ascii data arrays are read"), std::string::npos) << refusal(dir / "b.vtu");
-  EXPECT_NE(refusal(dir / "x.obj").find("unknown tet mesh format"), std::string::npos);
+  EXPECT_NE(import_refusal(dir / "b.vtu").find("only ascii data arrays are read"), std::string::npos) << import_refusal(dir / "b.vtu");
+  EXPECT_NE(import_refusal(dir / "x.obj").find("unknown tet mesh format"), std::string::npos);
 }

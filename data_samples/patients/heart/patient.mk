@@ -12,4 +12,5 @@ SCENARIOS := ../../scenarios/heart_grab.yaml ../../scenarios/heart_cut.yaml ../.
              ../../scenarios/heart_explicit_grab.yaml ../../scenarios/heart_fem_grab.yaml \
              ../../scenarios/heart_retract.yaml ../../scenarios/heart_fem_cut.yaml \
              ../../scenarios/heart_cut_suture.yaml ../../scenarios/heart_fem_local.yaml \
-             ../../scenarios/heart_fem_inclusion.yaml ../../scenarios/heart_cautery.yaml
+             ../../scenarios/heart_fem_inclusion.yaml ../../scenarios/heart_cautery.yaml \
+             ../../scenarios/heart_explicit_inclusion.yaml

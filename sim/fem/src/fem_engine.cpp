@@ -5,8 +5,9 @@
 #include "ctsurg/sim/fem/fem_cutting.h"
 #include "ctsurg/sim/fem/fem_element_removal.h"
 #include "ctsurg/sim/fem/fem_forces.h"
+#include "ctsurg/sim/fem/fem_integrator.h"
+#include "ctsurg/sim/fem/fem_local_region.h"
 #include "ctsurg/sim/fem/kernels/fem_quadratic_element_impl.h"
-#include "fem_rigid_modes.h"
 
 #include <algorithm>
 #include <array>
@@ -127,7 +128,8 @@ FemEngine::FemEngine(FemModel model, FemBoundaryConditions supports, EmbeddedSur
   }
 }
 
-// The solver for options_.solver on model_ and supports_ (at the start, and again after a cut split nodes).
+// The integrator for options_.solver on model_ and supports_ (at the start, and again after a cut split
+// nodes or a removal took elements), and without a surface the mesh's boundary faces.
 void FemEngine::make_solvers() {
   if (surface_.empty()) {
     const size_t npe = static_cast<size_t>(model_.nodes_per_element());
@@ -136,81 +138,8 @@ void FemEngine::make_solvers() {
     for (size_t e = 0; e < model_.tets.size(); e += npe) corners.insert(corners.end(), model_.tets.begin() + static_cast<std::ptrdiff_t>(e), model_.tets.begin() + static_cast<std::ptrdiff_t>(e + 4));
     boundary_triangles_ = fem_boundary_faces(corners);
   }
-  if (options_.solver == FemSolver::dynamic) {
-    FemDynamicsOptions o;  // the explicit dynamics' own options struct: every field it needs, from ours
-    o.dt = options_.dt;
-    o.safety_factor = options_.safety_factor;
-    o.mass_damping = options_.mass_damping;
-    o.gravity = options_.gravity;
-    o.threads = options_.threads;
-    o.contact = options_.contact;
-    dynamics_.reset();
-    dynamics_.emplace(model_, o, backend_);
-    dynamics_->set_fixed_nodes(supports_.fixed_nodes);
-    return;
-  }
-  if (options_.solver == FemSolver::implicit) {
-    FemImplicitOptions o;
-    o.dt = options_.dt > 0 ? options_.dt : 1.0 / 60;
-    o.mass_damping = options_.mass_damping;
-    o.stiffness_damping = options_.stiffness_damping;
-    o.gravity = options_.gravity;
-    o.threads = options_.threads;
-    o.newton = options_.newton;
-    implicit_ = std::make_unique<FemImplicitDynamics>(model_, o, backend_);
-    implicit_->set_supports(supports_.fixed_nodes, supports_.fixed_components);
-    return;
-  }
-  // Quasi-static. The linear material factorises its constant stiffness once; the nonlinear laws run
-  // Newton with conjugate gradients per frame.
-  linear_.reset();
-  static_solver_.reset();
-  local_.reset();
-  if (supports_.fixed_nodes.empty() && supports_.fixed_components.empty()) {
-    throw InputError(options_.where, "fixed", "a static FEM problem needs fixed nodes (the system is singular otherwise)");
-  }
-  bc_ = supports_;
-  FemStaticOptions newton = options_.newton;
-  newton.threads = options_.threads;
-  newton.initial_displacements.clear();
-  // The linear law's condensation (fem_linear_static_solver.h) needs supports that hold the model on
-  // their own; where a grab completes them (a roller and a grab), Newton's solver holds both.
-  std::vector<uint8_t> supported(3 * static_cast<size_t>(model_.node_count()), 0);
-  for (const int32_t n : supports_.fixed_nodes) supported[3 * static_cast<size_t>(n)] = supported[3 * static_cast<size_t>(n) + 1] =
-      supported[3 * static_cast<size_t>(n) + 2] = 1;
-  for (const int32_t c : supports_.fixed_components) supported[static_cast<size_t>(c)] = 1;
-  const bool supports_hold = free_rigid_modes(model_, supported, fem_bounding_diagonal(model_)).empty();
-  if (options_.local_region_mm) {
-    // The region's Newton solves with the model's law; the rest from the linear model, factorised once.
-    if (!supports_hold) {
-      throw InputError(options_.where, "local_region", "the global linear model of a local region is factorised once, so the fixed "
-                                                       "regions alone must hold the model (no rigid motion left to a grab)");
-    }
-    FemLocalRegionOptions lo;
-    lo.radius_mm = *options_.local_region_mm;
-    lo.newton = newton;
-    lo.linear.threads = options_.threads;
-    lo.balance_iterations = options_.local_region_balance_iterations;
-    local_ = std::make_unique<FemLocalRegionSolver>(model_, bc_, lo, backend_);
-    if (options_.note) {
-      options_.note("FEM local region: Newton within " + std::to_string(lo.radius_mm) + " mm (geodesic) of the tools' nodes, the rest linear (" +
-                    std::to_string(local_->linear_stats().factor_nonzeros) + " non-zeros factorised once, " +
-                    std::to_string(local_->linear_stats().factor_seconds) + " s)");
-    }
-    return;
-  }
-  if (model_.every_law(FemLaw::linear) && model_.order == 1 && newton.linear_solve != FemLinearSolve::iterative &&
-      supports_hold) {
-    FemLinearSolverOptions lo;
-    lo.threads = options_.threads;
-    linear_ = std::make_unique<FemLinearStaticSolver>(model_, bc_, lo);
-    if (options_.note) {
-      options_.note("FEM linear static: stiffness factorised once (" + std::to_string(linear_->stats().factor_nonzeros) +
-                    " non-zeros, " + std::to_string(linear_->stats().factor_seconds) + " s); each frame a condensed solve");
-    }
-  } else {
-    static_solver_ = std::make_unique<FemStaticSolver>(model_, newton, backend_);
-  }
+  integrator_.reset();  // the old solver's memory goes before the new one's is taken
+  integrator_ = make_fem_integrator(model_, supports_, options_, backend_);
 }
 
 FemEngine::~FemEngine() = default;
@@ -319,23 +248,10 @@ void FemEngine::split_nodes(const std::vector<int32_t>& tets, const std::vector<
     }
   }
   // The dynamics' state, carried over.
-  std::vector<Real> ru, rprev;
-  std::vector<double> v;
-  double t = 0;
-  int64_t steps_taken = 0;
-  if (dynamics_) {
-    ru = dynamics_->raw_displacements();
-    rprev = dynamics_->raw_previous_displacements();
-    extend(ru);
-    extend(rprev);
-    t = dynamics_->time();
-    steps_taken = dynamics_->steps_taken();
-  } else if (implicit_) {
-    v = implicit_->velocities();
-    extend(v);
-    t = implicit_->time();
-    steps_taken = implicit_->steps_taken();
-  }
+  FemCarriedState carried = integrator_->carried_state();
+  if (!carried.displacements.empty()) extend(carried.displacements);
+  if (!carried.previous_displacements.empty()) extend(carried.previous_displacements);
+  if (!carried.velocities.empty()) extend(carried.velocities);
   extend(u_);
   model_ = std::move(m);  // the same object: holds_ and the solvers' references stay valid until rebuilt
   holds_.nodes_added(parents);
@@ -345,14 +261,7 @@ void FemEngine::split_nodes(const std::vector<int32_t>& tets, const std::vector<
   counts_.fixed = std::count(fixed.begin(), fixed.end(), kAllAxes);
   counts_.partly_fixed = m.node_count() - counts_.fixed - std::count(fixed.begin(), fixed.end(), uint8_t{0});
   make_solvers();
-  if (dynamics_) {
-    dynamics_->restore_state(ru, rprev, t, steps_taken);
-    if (!holds_.nodal_forces().empty()) dynamics_->set_external_forces(holds_.nodal_forces());
-    had_grab_ = false;
-  } else if (implicit_) {
-    implicit_->restore_state(u_, v, t, steps_taken);
-    if (!holds_.nodal_forces().empty()) implicit_->set_external_forces(holds_.nodal_forces());
-  }
+  integrator_->restore(carried, u_, holds_.nodal_forces());
   if (!surface_.empty()) {
     std::vector<int32_t> ties = surface_.coupling().particles;
     for (size_t v2 = 0; v2 < surface_element_.size(); ++v2) {
@@ -394,7 +303,7 @@ void FemEngine::remove_tissue(const std::vector<ToolInput>& tools, int steps) {
   std::string label;
   for (size_t i = 0; i < tools.size(); ++i) {
     if (tools[i].acts != ToolPrimitive::remove || !tools[i].active) continue;
-    removal_budget_[i] += tools[i].removal_rate_mm3_s * dynamics_->dt() * steps;
+    removal_budget_[i] += tools[i].removal_rate_mm3_s * integrator_->dt() * steps;
     const FemElementRemoval r = fem_elements_in_sphere(model_, u_, {tools[i].centre, tools[i].radius_mm}, &removal_budget_[i]);
     for (const int32_t e : r.elements) {
       const double v = model_.rest_volume[static_cast<size_t>(e)];
@@ -427,16 +336,12 @@ void FemEngine::remove_tissue(const std::vector<ToolInput>& tools, int steps) {
       surface_element_[v] = new_index[static_cast<size_t>(e)];
     }
   }
-  const std::vector<Real> ru = dynamics_->raw_displacements(), rprev = dynamics_->raw_previous_displacements();
-  const double t = dynamics_->time();
-  const int64_t steps_taken = dynamics_->steps_taken();
-  options_.dt = dynamics_->dt();  // the run's step stays (taking elements away lowers no element's critical step)
+  const FemCarriedState carried = integrator_->carried_state();
+  options_.dt = integrator_->dt();  // the run's step stays (taking elements away lowers no element's critical step)
   model_ = fem_model_without(model_, removed);  // the same object: holds_ keeps its reference; the node ids stay
   counts_.elements = model_.tet_count();
   make_solvers();
-  dynamics_->restore_state(ru, rprev, t, steps_taken);
-  if (!holds_.nodal_forces().empty()) dynamics_->set_external_forces(holds_.nodal_forces());
-  had_grab_ = false;
+  integrator_->restore(carried, u_, holds_.nodal_forces());
   removed_volume_ += volume;
   if (!vertex_gone.empty()) {
     // The holes the crater opens are closed; the surface's own boundary is the one it had before.
@@ -457,7 +362,7 @@ constexpr int32_t kMaxBodyMetrics = 16;
 
 std::vector<std::pair<std::string, std::string>> FemEngine::extra_metrics() const {
   std::vector<std::pair<std::string, std::string>> names{{"newton_iterations", "1"}, {"cg_iterations", "1"}, {"element_volume", "mm^3"}, {"nodes", "1"}};
-  if (local_) {
+  if (integrator_->local_region()) {
     for (const char* n : {"region_nodes", "region_tets", "interface_nodes"}) names.emplace_back(n, "1");
     names.emplace_back("interface_residual", "uN");
   }
@@ -470,8 +375,8 @@ std::vector<std::pair<std::string, std::string>> FemEngine::extra_metrics() cons
   return names;
 }
 
-double FemEngine::dt() const { return dynamics_ ? dynamics_->dt() : implicit_ ? implicit_->dt() : 0.0; }
-double FemEngine::time() const { return dynamics_ ? dynamics_->time() : implicit_ ? implicit_->time() : static_time_; }
+double FemEngine::dt() const { return integrator_->dt(); }
+double FemEngine::time() const { return integrator_->time(); }
 
 void FemEngine::check_tools(const std::vector<ToolInput>& tools) const {
   for (const ToolInput& tool : tools) {
@@ -489,7 +394,7 @@ void FemEngine::check_tools(const std::vector<ToolInput>& tools) const {
         break;
       case ToolPrimitive::push_sphere:
       case ToolPrimitive::push_shape:
-        if (!dynamics_) {
+        if (options_.solver != FemSolver::dynamic) {
           throw InputError(options_.where, tool.label,
                            tool.name +
                                " needs solver: dynamic (contact is part of the explicit dynamics only, not of the static or implicit solvers)");
@@ -503,7 +408,7 @@ void FemEngine::check_tools(const std::vector<ToolInput>& tools) const {
         // Removing elements rebuilds the model under the explicit dynamics' state (remove_tissue).
         std::string why;
         if (model_.order != 1) why = "needs linear (4-node) tets";
-        if (!dynamics_) why = "needs solver: dynamic (the explicit dynamics carries its state over a removal)";
+        if (options_.solver != FemSolver::dynamic) why = "needs solver: dynamic (the explicit dynamics carries its state over a removal)";
         if (backend_ != Backend::cpu) why = "runs on the cpu backend only; set backend: cpu";
         if (options_.contact.enabled) why = "and contact together are not supported (the bodies are the mesh's pieces at the start)";
         for (const ToolInput& other : tools)
@@ -516,130 +421,29 @@ void FemEngine::check_tools(const std::vector<ToolInput>& tools) const {
 }
 
 StabilityReport FemEngine::step(const std::vector<ToolInput>& tools, int steps) {
-  if (!dynamics_ && !implicit_) throw RuntimeError(options_.where + ": the static FEM solver has no time steps (it solves each frame)");
+  if (integrator_->quasi_static()) throw RuntimeError(options_.where + ": the static FEM solver has no time steps (it solves each frame)");
   check_tools(tools);
   apply_cuts(tools);
   remove_tissue(tools, steps);
-  if (implicit_) return step_implicit(tools, steps);
-  const double t_next = dynamics_->time() + dynamics_->dt();
-  if (holds_.captures(tools)) sync();  // a tool captures the nodes where they are now
-  holds_.update_grabs(tools, t_next, u_, false, grab_nodes_, grab_displacements_);
-  if (!grab_nodes_.empty()) {
-    dynamics_->set_prescribed(grab_nodes_, grab_displacements_);
-    had_grab_ = true;
-  } else if (had_grab_) {
-    dynamics_->clear_prescribed();
-    had_grab_ = false;
-  }
-  // One probe at a time is supported by the dynamics' contact sphere: the first active one.
-  std::array<double, 3> centre{0, 0, 0};
-  double radius = 0;
-  for (const ToolInput& tool : tools) {
-    if (tool.acts == ToolPrimitive::push_sphere && tool.active) {
-      centre = tool.centre;
-      radius = tool.radius_mm;
-      break;
-    }
-  }
-  dynamics_->set_contact_sphere(centre, radius);
-  instrument_views_.clear();
-  for (const ToolInput& tool : tools) {
-    if (tool.acts != ToolPrimitive::push_shape || !tool.active) continue;
-    if (!tool.instrument) throw InputError(options_.where, tool.label, "the instrument has no shape");
-    instrument_views_.push_back(instrument_view(*tool.instrument, tool.orientation, tool.centre));
-  }
-  dynamics_->set_contact_instruments(instrument_views_);
-  if (holds_.update_forces(tools, u_, false)) dynamics_->set_external_forces(holds_.nodal_forces());
-  try {
-    dynamics_->step(steps);
-  } catch (const RuntimeError& e) {
-    StabilityReport r;
-    r.stable = false;
-    r.time = dynamics_->time();
-    r.message = e.what();
-    return r;
-  }
+  const FemAdvance a = integrator_->advance(holds_, tools, steps, u_);
+  if (!a.stability.stable) return a.stability;
+  newton_ += a.newton_iterations;  // the implicit dynamics' Newton iterations, cumulative
   steps_ += steps;
   return {};
 }
 
 void FemEngine::equilibrium(const std::vector<ToolInput>& tools, double time) {
-  if (dynamics_ || implicit_) throw RuntimeError(options_.where + ": the dynamic FEM solver steps in time (it has no equilibrium solve)");
+  if (!integrator_->quasi_static()) throw RuntimeError(options_.where + ": the dynamic FEM solver steps in time (it has no equilibrium solve)");
   check_tools(tools);
   apply_cuts(tools);
-  holds_.update_grabs(tools, time, u_, true, grab_nodes_, grab_displacements_);
-  holds_.update_forces(tools, u_, true);
-  FemLoads loads;
-  loads.gravity = options_.gravity;
-  loads.forces = holds_.nodal_forces();
-  FemStaticResult r;
-  if (local_) {
-    // The region grows from every node a tool holds or loads, as far as that tool's radius (its own
-    // local_region_mm, or the engine's).
-    seeds_.clear();
-    seed_radii_.clear();
-    for (size_t t = 0; t < tools.size(); ++t) {
-      if (tools[t].acts != ToolPrimitive::hold && tools[t].acts != ToolPrimitive::load) continue;
-      const std::vector<int32_t>& held = holds_.held_nodes(t);
-      seeds_.insert(seeds_.end(), held.begin(), held.end());
-      seed_radii_.resize(seeds_.size(), tools[t].local_region_mm > 0 ? tools[t].local_region_mm : *options_.local_region_mm);
-    }
-    r = local_->solve(grab_nodes_, grab_displacements_, loads, seeds_, solves_ > 0 ? &u_ : nullptr, &seed_radii_);
-  } else if (linear_) {
-    r = linear_->solve(grab_nodes_, grab_displacements_, loads);
-  } else {
-    bc_.prescribed_nodes = grab_nodes_;
-    bc_.prescribed_displacements = grab_displacements_;
-    r = static_solver_->solve(bc_, loads, solves_ > 0 ? &u_ : nullptr);  // warm start from the previous frame
-  }
-  if (!r.report.converged) {
-    throw RuntimeError(options_.where + ": the static FEM solve at t = " + std::to_string(time) +
-                       " s did not converge: relative residual " + std::to_string(r.report.relative_residual) + " after " +
-                       std::to_string(r.report.newton_iterations) + " Newton iterations");
-  }
-  u_ = std::move(r.displacements);
-  newton_ = r.report.newton_iterations;
-  cg_ = std::accumulate(r.report.cg_iterations.begin(), r.report.cg_iterations.end(), 0);
-  steps_ += r.report.newton_iterations;
-  static_time_ = time;
+  const FemAdvance a = integrator_->equilibrium(holds_, tools, time, solves_ > 0, u_);  // warm start from the previous frame
+  newton_ = a.newton_iterations;
+  cg_ = a.cg_iterations;
+  steps_ += a.newton_iterations;
   ++solves_;
 }
 
-void FemEngine::sync() {
-  if (implicit_) {
-    u_ = implicit_->displacements();
-    return;
-  }
-  if (!dynamics_) return;
-  const auto d = dynamics_->displacements();
-  u_.assign(d.begin(), d.end());
-}
-
-StabilityReport FemEngine::step_implicit(const std::vector<ToolInput>& tools, int steps) {
-  const double t_next = implicit_->time() + implicit_->dt();
-  if (holds_.captures(tools)) sync();  // a tool captures the nodes where they are now
-  // Captured with the tool where it started (within this step: a frame-long step must not lose the
-  // tool's motion over it, as capturing at t_next would).
-  holds_.update_grabs(tools, t_next, u_, true, grab_nodes_, grab_displacements_);
-  if (!grab_nodes_.empty()) {
-    implicit_->set_prescribed(grab_nodes_, grab_displacements_);
-  } else {
-    implicit_->clear_prescribed();
-  }
-  if (holds_.update_forces(tools, u_, false)) implicit_->set_external_forces(holds_.nodal_forces());
-  try {
-    const FemImplicitStepReport r = implicit_->step(steps);
-    newton_ += r.newton_iterations;
-  } catch (const RuntimeError& e) {
-    StabilityReport r;
-    r.stable = false;
-    r.time = implicit_->time();
-    r.message = e.what();
-    return r;
-  }
-  steps_ += steps;
-  return {};
-}
+void FemEngine::sync() { integrator_->displacements(u_); }
 
 void FemEngine::positions(std::vector<double>& xyz) const {
   xyz.resize(u_.size());
@@ -677,9 +481,15 @@ void FemEngine::surface_vertices(std::vector<float>& xyz) {
   surface_.move(positions_, rest_real_, xyz, options_.threads);
 }
 
+const std::vector<uint8_t>* FemEngine::local_region() const {
+  const FemLocalRegionSolver* local = integrator_->local_region();
+  return local ? &local->node_region() : nullptr;
+}
+
 bool FemEngine::surface_vertex_region(std::vector<uint8_t>& flags) const {
-  if (!local_) return false;
-  const std::vector<uint8_t>& nodes = local_->node_region();
+  const FemLocalRegionSolver* local = integrator_->local_region();
+  if (!local) return false;
+  const std::vector<uint8_t>& nodes = local->node_region();
   const size_t nn = static_cast<size_t>(model_.node_count());
   const bool solved = nodes.size() == nn;  // none before the first solve
   const auto node_flag = [&](int32_t n) { return solved && n >= 0 ? nodes[static_cast<size_t>(n)] : uint8_t{0}; };
@@ -700,8 +510,8 @@ bool FemEngine::surface_vertex_region(std::vector<uint8_t>& flags) const {
 EngineMetrics FemEngine::metrics() const {
   EngineMetrics m;
   m.removed_volume = removed_volume_;
-  m.kinetic_energy = dynamics_ ? dynamics_->kinetic_energy() : implicit_ ? implicit_->kinetic_energy() : 0.0;
-  m.elastic_energy = dynamics_ ? dynamics_->strain_energy() : implicit_ ? implicit_->strain_energy() : fem_strain_energy(model_, u_);
+  m.kinetic_energy = integrator_->kinetic_energy();
+  m.elastic_energy = integrator_->strain_energy(model_, u_);
   double max_u = 0;
   for (size_t i = 0; i < u_.size(); i += 3) max_u = std::max(max_u, u_[i] * u_[i] + u_[i + 1] * u_[i + 1] + u_[i + 2] * u_[i + 2]);
   m.max_displacement = std::sqrt(max_u);
@@ -729,13 +539,13 @@ EngineMetrics FemEngine::metrics() const {
     }
   }
   m.extra = {static_cast<double>(newton_), static_cast<double>(cg_), volume, static_cast<double>(model_.node_count())};
-  if (local_) {
-    const FemLocalRegionReport& lr = local_->report();
+  if (const FemLocalRegionSolver* local = integrator_->local_region()) {
+    const FemLocalRegionReport& lr = local->report();
     m.extra.insert(m.extra.end(), {static_cast<double>(lr.region_nodes), static_cast<double>(lr.region_tets),
                                    static_cast<double>(lr.interface_nodes), lr.interface_residual});
   }
   if (options_.contact.enabled) {
-    const FemContact* contact = dynamics_ ? dynamics_->contact() : nullptr;
+    const FemContact* contact = integrator_->contact();
     const std::vector<Real> u(u_.begin(), u_.end());
     m.extra.push_back(contact ? contact->deepest_penetration(model_, u.data()) : 0.0);
     m.extra.insert(m.extra.end(), body_volume.begin(), body_volume.end());

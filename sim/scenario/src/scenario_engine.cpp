@@ -29,6 +29,75 @@ namespace {
 // The run's local origin: the whole-millimetre point nearest `centre` (LPS mm).
 Vec3 local_origin(const Vec3& centre) { return {std::round(centre[0]), std::round(centre[1]), std::round(centre[2])}; }
 
+// The centroid of tet e of `mesh` (the mesh's frame, mm).
+Vec3 tet_centroid(const TetMesh& mesh, size_t e) {
+  Vec3 x{0, 0, 0};
+  for (size_t a = 0; a < 3; ++a)
+    for (size_t k = 0; k < 4; ++k) x[a] += 0.25 * mesh.nodes[3 * static_cast<size_t>(mesh.tets[4 * e + k]) + a];
+  return x;
+}
+
+// material.labels against the labels the model's elements carry (`labels`, one per tet or particle):
+// label -> index into s.label_materials (65,536 entries, -1 = none). Every element's label needs a
+// material and every material's label must be there; `owner` names what carries them ("the tet mesh"),
+// `path` its file. Empty when the scenario gives no labels.
+std::vector<int32_t> label_material_index(const Scenario& s, const std::vector<uint16_t>& labels, const std::string& owner,
+                                          const std::string& path) {
+  if (s.label_materials.empty()) return {};
+  const std::string sfile = s.file.string();
+  std::vector<uint8_t> present(65536, 0);
+  for (const uint16_t l : labels) present[l] = 1;
+  std::string in_model;
+  for (size_t l = 0; l < present.size(); ++l)
+    if (present[l]) in_model += (in_model.empty() ? "" : ", ") + std::to_string(l);
+  std::vector<int32_t> index(65536, -1);
+  for (size_t m = 0; m < s.label_materials.size(); ++m) {
+    const LabelMaterial& lm = s.label_materials[m];
+    if (!present[lm.label]) {
+      throw InputError(sfile, lm.field, owner + " " + path + " has no label " + std::to_string(lm.label) + " (its labels: " + in_model + ")");
+    }
+    index[lm.label] = static_cast<int32_t>(m);
+  }
+  for (size_t l = 0; l < present.size(); ++l) {
+    if (present[l] && index[l] < 0) {
+      throw InputError(sfile, "material.labels", owner + "'s label " + std::to_string(l) + " has no material (its labels: " + in_model +
+                                                     "); give every label one");
+    }
+  }
+  return index;
+}
+
+// material.inclusions: the elements whose centre (centre(e), local frame) lies in inclusion k's sphere
+// take material first + k, a later inclusion over an earlier one. element_material (#count) is filled
+// with 0 first when empty. The sphere's at_fraction refers to `lps_bounds`; `origin` is the local
+// frame's. InputError naming the inclusion when its sphere holds no element ("holds no <element> of
+// <owner>").
+void apply_inclusions(const Scenario& s, int32_t first, size_t count, const std::function<Vec3(size_t)>& centre,
+                      const RestBounds& lps_bounds, const Vec3& origin, const std::string& element, const std::string& owner,
+                      std::vector<int32_t>& element_material, const std::function<void(const std::string&)>& note) {
+  for (size_t k = 0; k < s.inclusions.size(); ++k) {
+    const InclusionMaterial& inc = s.inclusions[k];
+    Vec3 c = inc.centre.kind == PointSpec::Kind::at_fraction ? lps_bounds.at(inc.centre.value) : inc.centre.value;  // LPS
+    for (size_t a = 0; a < 3; ++a) c[a] -= origin[a];
+    const int32_t id = first + static_cast<int32_t>(k);
+    if (element_material.empty()) element_material.assign(count, 0);
+    int64_t taken = 0;
+    for (size_t e = 0; e < count; ++e) {
+      const Vec3 x = centre(e);
+      double d2 = 0;
+      for (size_t a = 0; a < 3; ++a) d2 += (x[a] - c[a]) * (x[a] - c[a]);
+      if (d2 < inc.radius_mm * inc.radius_mm) element_material[e] = id, ++taken;
+    }
+    if (taken == 0) {
+      throw InputError(s.file.string(), inc.field + ".sphere",
+                       "holds no " + element + " of " + owner + " (centre LPS " + std::to_string(c[0] + origin[0]) + ", " +
+                           std::to_string(c[1] + origin[1]) + ", " + std::to_string(c[2] + origin[2]) + " mm, radius " +
+                           std::to_string(inc.radius_mm) + " mm)");
+    }
+    if (note) note(inc.field + ": " + std::to_string(taken) + " " + element + "s of " + inc.material.name);
+  }
+}
+
 // What the scenario's fixed regions hold: the whole particles (or nodes; increasing ids) and, for
 // regions that fix some axes only, single components (3 id + axis, increasing; not of whole ones).
 struct Held {
@@ -133,17 +202,65 @@ ScenarioEngine spring_engine(const Scenario& s, Backend backend, const std::func
   std::optional<SpringGridModel> grid_model;
   std::optional<TetMesh> tetmesh;
   SpringModel model;
+  // Each organ its own material (material.labels, material.inclusions; explicit springs only, parsed so):
+  // the labels' materials (or the section's) and then the inclusions', indexed per tet or grid cell.
+  const bool per_element = !s.label_materials.empty() || !s.inclusions.empty();
+  std::vector<Material> materials;
+  for (const LabelMaterial& lm : s.label_materials) materials.push_back(lm.material);
+  if (materials.empty()) materials.push_back(s.material);
+  const int32_t first_inclusion = static_cast<int32_t>(materials.size());
+  for (const InclusionMaterial& inc : s.inclusions) materials.push_back(inc.material);
   if (!in.tetmesh) {
-    grid_model = build_spring_grid_model(grid, calibrated_grid_material(s.material, grid.occupancy.geometry, s.mass_from_fraction));
+    grid_model = build_spring_grid_model(grid, calibrated_grid_material(materials.front(), grid.occupancy.geometry, s.mass_from_fraction));
     if (s.model == ModelKind::spring_grid) {
       model = *grid_model;
-    } else {
+    } else if (!per_element) {
       model = explicit_model_from_grid(*grid_model);
+    } else {
+      // A particle takes the material of its cell's label (/grid/label: the cell's dominant tissue).
+      const int32_t n = grid_model->particle_count();
+      const int64_t cells = static_cast<int64_t>(grid.label.voxels.size());
+      std::vector<uint16_t> particle_label(static_cast<size_t>(n), 0);
+      if (!s.label_materials.empty()) {
+        if (grid.label.geometry.dims != grid.occupancy.geometry.dims) {
+          throw InputError(sfile, "material.labels", "the occupancy grid " + s.grid.string() + " has no /grid/label on its lattice");
+        }
+        for (int32_t p = 0; p < n; ++p) {
+          const int64_t c = grid_model->cells[static_cast<size_t>(p)];
+          if (c >= 0 && c < cells) particle_label[static_cast<size_t>(p)] = grid.label.voxels[static_cast<size_t>(c)];
+        }
+      }
+      const std::vector<int32_t> label_index = label_material_index(s, particle_label, "the occupancy grid", s.grid.string());
+      std::vector<int32_t> particle_material;
+      if (!label_index.empty()) {
+        particle_material.reserve(static_cast<size_t>(n));
+        for (const uint16_t l : particle_label) particle_material.push_back(label_index[l]);
+      }
+      const std::vector<Real>& rest = grid_model->rest_positions;
+      RestBounds lps = bounds_of(rest);
+      for (size_t a = 0; a < 3; ++a) lps.lo[a] += origin[a], lps.hi[a] += origin[a];
+      apply_inclusions(s, first_inclusion, static_cast<size_t>(n),
+                       [&](size_t p) { return Vec3{rest[3 * p], rest[3 * p + 1], rest[3 * p + 2]}; }, lps, origin, "cell",
+                       "the occupancy grid", particle_material, note);
+      model = calibrated_grid_spring_model(*grid_model, materials, particle_material, materials.front().density);
     }
   } else {
     tetmesh = read_tet_mesh_file(s.tetmesh);
+    const RestBounds lps = bounds_of(tetmesh->nodes);
     for (size_t i = 0; i < tetmesh->nodes.size(); ++i) tetmesh->nodes[i] -= origin[i % 3];
-    model = calibrated_tet_spring_model(*tetmesh, s.material);
+    if (!per_element) {
+      model = calibrated_tet_spring_model(*tetmesh, s.material);
+    } else {
+      const std::vector<int32_t> label_index = label_material_index(s, tetmesh->tet_labels, "the tet mesh", s.tetmesh.string());
+      std::vector<int32_t> tet_material;
+      if (!label_index.empty()) {
+        tet_material.reserve(tetmesh->tet_labels.size());
+        for (const uint16_t l : tetmesh->tet_labels) tet_material.push_back(label_index[l]);
+      }
+      apply_inclusions(s, first_inclusion, tetmesh->tet_labels.size(), [&](size_t e) { return tet_centroid(*tetmesh, e); }, lps, origin,
+                       "tet", "the tet mesh", tet_material, note);
+      model = calibrated_tet_spring_model(*tetmesh, materials, tet_material);
+    }
   }
   const std::vector<Real>& rest = std::visit([](const auto& m) -> const std::vector<Real>& { return m.rest_positions; }, model);
   ParticleState state = std::visit([](const auto& m) { return m.make_state(); }, model);
@@ -208,29 +325,9 @@ ScenarioEngine fem_engine(const Scenario& s, Backend backend, const std::functio
   const std::string sfile = s.file.string();
   TetMesh mesh = read_tet_mesh_file(s.tetmesh);
   // material.labels: every label of the mesh has a material and every material's label is in the mesh.
-  std::vector<int32_t> label_to_material;  // label -> index into materials
+  const std::vector<int32_t> label_to_material = label_material_index(s, mesh.tet_labels, "the tet mesh", s.tetmesh.string());
   std::vector<FemMaterial> materials;
-  if (!s.label_materials.empty()) {
-    std::vector<uint8_t> present(65536, 0);
-    for (const uint16_t l : mesh.tet_labels) present[l] = 1;
-    std::string in_mesh;
-    for (size_t l = 0; l < present.size(); ++l)
-      if (present[l]) in_mesh += (in_mesh.empty() ? "" : ", ") + std::to_string(l);
-    label_to_material.assign(65536, -1);
-    for (const LabelMaterial& lm : s.label_materials) {
-      if (!present[lm.label]) {
-        throw InputError(sfile, lm.field, "the tet mesh " + s.tetmesh.string() + " has no label " + std::to_string(lm.label) + " (its labels: " + in_mesh + ")");
-      }
-      label_to_material[lm.label] = static_cast<int32_t>(materials.size());
-      materials.push_back(fem_material_of(lm));
-    }
-    for (size_t l = 0; l < present.size(); ++l) {
-      if (present[l] && label_to_material[l] < 0) {
-        throw InputError(sfile, "material.labels", "the tet mesh's label " + std::to_string(l) + " has no material (its labels: " + in_mesh +
-                                                       "); give every label one");
-      }
-    }
-  }
+  for (const LabelMaterial& lm : s.label_materials) materials.push_back(fem_material_of(lm));
   const RestBounds lps_bounds = bounds_of(mesh.nodes);
   const Vec3 origin = local_origin({0.5 * (lps_bounds.lo[0] + lps_bounds.hi[0]), 0.5 * (lps_bounds.lo[1] + lps_bounds.hi[1]),
                                     0.5 * (lps_bounds.lo[2] + lps_bounds.hi[2])});
@@ -258,29 +355,10 @@ ScenarioEngine fem_engine(const Scenario& s, Backend backend, const std::functio
     for (const uint16_t l : mesh.tet_labels) element_material.push_back(label_to_material[l]);
   }
   // Inclusions: the tets whose centroid lies in the sphere take its material (a later one wins).
-  for (const InclusionMaterial& inc : s.inclusions) {
-    Vec3 c = inc.centre.kind == PointSpec::Kind::at_fraction ? lps_bounds.at(inc.centre.value) : inc.centre.value;  // LPS
-    for (size_t a = 0; a < 3; ++a) c[a] -= origin[a];
-    const int32_t id = static_cast<int32_t>(materials.size());
-    materials.push_back(fem_material_of(inc));
-    if (element_material.empty()) element_material.assign(mesh.tet_labels.size(), 0);
-    int64_t taken = 0;
-    for (size_t e = 0; e < element_material.size(); ++e) {
-      double d2 = 0;
-      for (size_t a = 0; a < 3; ++a) {
-        double x = 0;
-        for (size_t k = 0; k < 4; ++k) x += 0.25 * mesh.nodes[3 * static_cast<size_t>(mesh.tets[4 * e + k]) + a];
-        d2 += (x - c[a]) * (x - c[a]);
-      }
-      if (d2 < inc.radius_mm * inc.radius_mm) element_material[e] = id, ++taken;
-    }
-    if (taken == 0) {
-      throw InputError(sfile, inc.field + ".sphere", "holds no element of the tet mesh (centre LPS " + std::to_string(c[0] + origin[0]) + ", " +
-                                                         std::to_string(c[1] + origin[1]) + ", " + std::to_string(c[2] + origin[2]) + " mm, radius " +
-                                                         std::to_string(inc.radius_mm) + " mm)");
-    }
-    if (note) note(inc.field + ": " + std::to_string(taken) + " tets of " + inc.material.name);
-  }
+  const int32_t first_inclusion = static_cast<int32_t>(materials.size());
+  for (const InclusionMaterial& inc : s.inclusions) materials.push_back(fem_material_of(inc));
+  apply_inclusions(s, first_inclusion, mesh.tet_labels.size(), [&](size_t e) { return tet_centroid(mesh, e); }, lps_bounds, origin, "element",
+                   "the tet mesh", element_material, note);
   FemModel model = s.fem_order == 2 ? build_quadratic_fem_model(mesh.nodes, mesh.tets, materials, element_material)
                                     : build_fem_model(mesh.nodes, mesh.tets, materials, element_material);
   model.frame_origin = {origin[0], origin[1], origin[2]};

@@ -102,6 +102,20 @@ void parse_material_fields(const YamlField& f, ModelKind model, FemLaw default_l
   if (model == ModelKind::fem) checked([&] { validate_fem_material(fem_material(law, material, constants), "material"); });
 }
 
+// material.labels and material.inclusions give each element (tet, tet-mesh spring or grid cell) its
+// own material: kind: fem and kind: explicit_springs. The implicit grid's kernel has one stiffness per
+// spring direction, and the vessel is one rod.
+void refuse_per_element_materials(const YamlField& f, ModelKind model) {
+  switch (model) {
+    case ModelKind::fem:
+    case ModelKind::explicit_springs: return;
+    case ModelKind::spring_grid:
+      f.fail("not for kind: spring_grid, whose kernel has one stiffness per spring direction; kind: explicit_springs "
+             "runs the same grid's springs with a stiffness each, and takes a material per label (docs/sim.md, \"Materials\")");
+    case ModelKind::vessel: f.fail("not for kind: vessel (the vessel is one rod of one material)");
+  }
+}
+
 }  // namespace
 
 void parse_material_section(const YamlField& mat, Scenario& s) {
@@ -115,8 +129,8 @@ void parse_material_section(const YamlField& mat, Scenario& s) {
   if (mat.has("labels")) {
     // Each tet label its own material; the section's law is the labels' default.
     const YamlField labels = mat.child("labels");
-    if (s.model != ModelKind::fem) labels.fail("only for kind: fem (the spring models and the vessel take one material)");
-    if (!labels.is_map()) labels.fail("a map of tet labels to materials, e.g. {2: {preset: kidney}, 5: {preset: liver}}");
+    refuse_per_element_materials(labels, s.model);
+    if (!labels.is_map()) labels.fail("a map of tissue labels to materials, e.g. {2: {preset: kidney}, 5: {preset: liver}}");
     for (const std::string& field : material_fields(false))
       if (mat.has(field)) mat.child(field).fail("with material.labels each label gives its own material: move it into the labels");
     const std::vector<std::string> entry_keys = material_fields(true);
@@ -125,7 +139,7 @@ void parse_material_section(const YamlField& mat, Scenario& s) {
       const YamlField entry = labels.child(key);
       char* end = nullptr;
       const long id = std::strtol(key.c_str(), &end, 10);
-      if (key.empty() || *end != '\0' || id < 1 || id > 65535) entry.fail("a tet label is a whole number from 1 to 65535, got '" + key + "'");
+      if (key.empty() || *end != '\0' || id < 1 || id > 65535) entry.fail("a tissue label is a whole number from 1 to 65535, got '" + key + "'");
       entry.only(entry_keys);
       LabelMaterial lm;
       lm.label = static_cast<uint16_t>(id);
@@ -148,7 +162,7 @@ void parse_material_section(const YamlField& mat, Scenario& s) {
   s.inclusions.clear();
   if (mat.has("inclusions")) {
     const YamlField list = mat.child("inclusions");
-    if (s.model != ModelKind::fem) list.fail("only for kind: fem (the spring models and the vessel take one material)");
+    refuse_per_element_materials(list, s.model);
     if (!list.is_sequence()) list.fail("a list of spheres of other materials, e.g. [{sphere: {at_fraction: [0.5, 0.5, 0.5], radius_mm: 8}, preset: tumour}]");
     std::vector<std::string> keys = material_fields(true);
     keys.push_back("sphere");
@@ -177,8 +191,6 @@ void parse_material_section(const YamlField& mat, Scenario& s) {
 
 FemMaterial fem_material_of(const Scenario& s) { return fem_material(s.material_law, s.material, s.law_constants); }
 
-FemMaterial fem_material_of(const LabelMaterial& m) { return fem_material(m.law, m.material, m.constants); }
-
-FemMaterial fem_material_of(const InclusionMaterial& m) { return fem_material(m.law, m.material, m.constants); }
+FemMaterial fem_material_of(const ElementMaterial& m) { return fem_material(m.law, m.material, m.constants); }
 
 }  // namespace ctsurg::sim

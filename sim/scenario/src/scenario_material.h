@@ -15,9 +15,8 @@ namespace ctsurg::sim {
 void parse_material_section(const YamlField& material, Scenario& s);
 
 // The FEM material of a parsed scenario (its law, E, nu, density and the law's constants), and of one
-// of its labels (material.labels).
+// of one of its labels or inclusions (material.labels, material.inclusions).
 FemMaterial fem_material_of(const Scenario& s);
-FemMaterial fem_material_of(const LabelMaterial& m);
-FemMaterial fem_material_of(const InclusionMaterial& m);
+FemMaterial fem_material_of(const ElementMaterial& m);
 
 }  // namespace ctsurg::sim

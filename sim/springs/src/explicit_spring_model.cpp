@@ -176,11 +176,26 @@ ExplicitSpringModel explicit_model_from_tet_mesh(const TetMesh& mesh, double den
 
 ExplicitSpringModel explicit_model_from_tet_mesh(const TetMesh& mesh, double density,
                                                  const std::function<double(double, double)>& stiffness, double damping) {
-  if (mesh.node_count() == 0 || mesh.tet_count() == 0) throw InputError("tetmesh", "/tetmesh/tets", "empty mesh");
   if (!(std::isfinite(density) && density > 0)) throw InputError("tetmesh", "density", "must be finite and > 0");
+  const std::size_t tets = static_cast<std::size_t>(std::max<int64_t>(mesh.tet_count(), 0));
+  return explicit_model_from_tet_mesh(mesh, std::vector<double>(tets, density), std::vector<double>(tets, 1.0), stiffness, damping);
+}
+
+ExplicitSpringModel explicit_model_from_tet_mesh(const TetMesh& mesh, const std::vector<double>& tet_density,
+                                                 const std::vector<double>& tet_weight,
+                                                 const std::function<double(double, double)>& stiffness, double damping) {
+  if (mesh.node_count() == 0 || mesh.tet_count() == 0) throw InputError("tetmesh", "/tetmesh/tets", "empty mesh");
+  if (tet_density.size() != static_cast<std::size_t>(mesh.tet_count()) || tet_weight.size() != tet_density.size()) {
+    throw InputError("tetmesh", "materials", "one density and one weight per tet: " + std::to_string(tet_density.size()) + " and " +
+                                                 std::to_string(tet_weight.size()) + " for " + std::to_string(mesh.tet_count()) + " tets");
+  }
+  for (std::size_t t = 0; t < tet_density.size(); ++t) {
+    if (!(std::isfinite(tet_density[t]) && tet_density[t] > 0)) throw InputError("tetmesh", "density", "tet " + std::to_string(t) + ": must be finite and > 0");
+    if (!(std::isfinite(tet_weight[t]) && tet_weight[t] >= 0)) throw InputError("tetmesh", "weight", "tet " + std::to_string(t) + ": must be finite and >= 0");
+  }
   const int64_t n = mesh.node_count();
   std::vector<double> lumped(static_cast<std::size_t>(n), 0.0);
-  std::map<std::pair<int32_t, int32_t>, double> edges;  // -> volume of its tets; ordered: deterministic spring order
+  std::map<std::pair<int32_t, int32_t>, double> edges;  // -> weighted volume of its tets; ordered: deterministic spring order
   for (int64_t t = 0; t < mesh.tet_count(); ++t) {
     const int32_t* v = &mesh.tets[static_cast<std::size_t>(4 * t)];
     for (int a = 0; a < 4; ++a)
@@ -188,9 +203,10 @@ ExplicitSpringModel explicit_model_from_tet_mesh(const TetMesh& mesh, double den
     Eigen::Vector3d p[4];
     for (int a = 0; a < 4; ++a) p[a] = Eigen::Vector3d(&mesh.nodes[static_cast<std::size_t>(3 * v[a])]);
     const double volume = std::abs((p[1] - p[0]).dot((p[2] - p[0]).cross(p[3] - p[0]))) / 6.0;
+    const double weighted = tet_weight[static_cast<std::size_t>(t)] * volume;
     for (int a = 0; a < 4; ++a) {
-      lumped[v[a]] += density * volume / 4.0;
-      for (int b = a + 1; b < 4; ++b) edges[std::minmax(v[a], v[b])] += volume;
+      lumped[v[a]] += tet_density[static_cast<std::size_t>(t)] * volume / 4.0;
+      for (int b = a + 1; b < 4; ++b) edges[std::minmax(v[a], v[b])] += weighted;
     }
   }
   std::vector<Real> rest(static_cast<std::size_t>(3 * n)), mass(static_cast<std::size_t>(n));

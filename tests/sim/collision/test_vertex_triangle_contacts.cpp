@@ -23,7 +23,7 @@ using collision_test::grid_plane;
 using collision_test::random_soup;
 using collision_test::Scene;
 
-std::vector<VertexTriangleContact> query(const Scene& s, double distance, ContactPairs pairs = ContactPairs::between_objects,
+std::vector<VertexTriangleContact> triangle_query(const Scene& s, double distance, ContactPairs pairs = ContactPairs::between_objects,
                                          double cell = 0, int threads = 0) {
   ContactOptions o;
   o.pairs = pairs, o.cell_size = cell, o.threads = threads;
@@ -120,8 +120,8 @@ TEST(VertexTriangleContacts, MatchesBruteForceOnRandomSoups) {
         for (const double cell : {0.0, 0.5, 1.0, 12.0}) {
           SCOPED_TRACE(testing::Message() << triangles << " triangles, offset " << offset << ", d " << distance
                                           << ", cell " << cell);
-          expect_identical(query(s, distance, ContactPairs::between_objects, cell), reference, "between objects");
-          expect_identical(query(s, distance, ContactPairs::all, cell), brute(s, distance, ContactPairs::all), "all");
+          expect_identical(triangle_query(s, distance, ContactPairs::between_objects, cell), reference, "between objects");
+          expect_identical(triangle_query(s, distance, ContactPairs::all, cell), brute(s, distance, ContactPairs::all), "all");
         }
         for (const auto& c : reference)
           for (double w : c.barycentric) ASSERT_TRUE(std::isfinite(w));
@@ -130,7 +130,7 @@ TEST(VertexTriangleContacts, MatchesBruteForceOnRandomSoups) {
   }
   // The test must see contacts: the 400-triangle soup at 2.5 mm has many, with distances <= 2.5.
   const Scene s = random_soup(400, 300, 30, 2.0, {0, 0, 650}, 417);
-  const auto c = query(s, 2.5);
+  const auto c = triangle_query(s, 2.5);
   EXPECT_GT(c.size(), 100u);
   for (const auto& r : c) {
     EXPECT_LE(r.distance, 2.5);
@@ -151,7 +151,7 @@ TEST(VertexTriangleContacts, PointsOnEdgesAndVerticesOfAPlane) {
   const uint32_t node = add_point(s, 3, 3, 650, 1);
   const uint32_t corner = add_point(s, 6, 0, 650, 1);  // a corner node with one triangle
   const uint32_t above = add_point(s, 2.25, 2.75, 650.5, 1);  // 0.5 above
-  const auto c = query(s, 1e-9);
+  const auto c = triangle_query(s, 1e-9);
   std::map<uint32_t, int> per_vertex;
   for (const auto& r : c) {
     ++per_vertex[r.vertex];
@@ -166,7 +166,7 @@ TEST(VertexTriangleContacts, PointsOnEdgesAndVerticesOfAPlane) {
   expect_identical(c, brute(s, 1e-9), "edges");
   // At 0.5 mm the point above meets its triangle's face only (distance 0.5, n = +z: positive side; the
   // other triangle of its square is 0.61 mm away).
-  const auto far = query(s, 0.5 + 1e-9);
+  const auto far = triangle_query(s, 0.5 + 1e-9);
   int face = 0;
   for (const auto& r : far)
     if (r.vertex == above) {
@@ -190,8 +190,8 @@ TEST(VertexTriangleContacts, SelfContactExcludesIncidentTriangles) {
   for (uint32_t i : top.primitives) s.primitives.push_back(i + base);
   s.primitive_object.insert(s.primitive_object.end(), top.primitive_object.begin(), top.primitive_object.end());
   // One object: nothing between objects; with self-contact, each sheet's vertices touch the other sheet.
-  EXPECT_TRUE(query(s, 0.35).empty());
-  const auto self = query(s, 0.35, ContactPairs::all);
+  EXPECT_TRUE(triangle_query(s, 0.35).empty());
+  const auto self = triangle_query(s, 0.35, ContactPairs::all);
   ASSERT_FALSE(self.empty());
   const uint32_t triangles_per_sheet = static_cast<uint32_t>(top.primitive_object.size());
   for (const auto& r : self) {
@@ -210,8 +210,8 @@ TEST(VertexTriangleContacts, SelfContactExcludesIncidentTriangles) {
 
 TEST(VertexTriangleContacts, ObjectFilter) {
   const Scene s = random_soup(300, 200, 15, 2.0, {0, 0, 0}, 99);
-  const auto between = query(s, 1.0);
-  const auto all = query(s, 1.0, ContactPairs::all);
+  const auto between = triangle_query(s, 1.0);
+  const auto all = triangle_query(s, 1.0, ContactPairs::all);
   ASSERT_GT(between.size(), 0u);
   EXPECT_GT(all.size(), between.size());  // self-contacts within object 0 or 1 too
   size_t same = 0;
@@ -222,15 +222,15 @@ TEST(VertexTriangleContacts, ObjectFilter) {
 
 TEST(VertexTriangleContacts, SortedAndTheSameForAnyThreadCount) {
   const Scene s = random_soup(40000, 20000, 80, 1.5, {0, 0, 650}, 4);
-  const auto one = query(s, 0.3, ContactPairs::all, 0, 1);
+  const auto one = triangle_query(s, 0.3, ContactPairs::all, 0, 1);
   ASSERT_GT(one.size(), 1000u);
   EXPECT_TRUE(std::is_sorted(one.begin(), one.end(), [](const auto& a, const auto& b) {
     return a.vertex != b.vertex ? a.vertex < b.vertex : a.triangle < b.triangle;
   }));
   for (std::size_t i = 1; i < one.size(); ++i)
     ASSERT_FALSE(one[i].vertex == one[i - 1].vertex && one[i].triangle == one[i - 1].triangle);  // no duplicates
-  for (const int threads : {2, 3, 8}) expect_identical(query(s, 0.3, ContactPairs::all, 0, threads), one, "threads");
-  expect_identical(query(s, 0.3, ContactPairs::all, 0.7, 2), one, "another cell size");
+  for (const int threads : {2, 3, 8}) expect_identical(triangle_query(s, 0.3, ContactPairs::all, 0, threads), one, "threads");
+  expect_identical(triangle_query(s, 0.3, ContactPairs::all, 0.7, 2), one, "another cell size");
 }
 
 TEST(VertexTriangleContacts, EmptyInputs) {
@@ -238,7 +238,7 @@ TEST(VertexTriangleContacts, EmptyInputs) {
   const std::vector<uint32_t> no_ids;
   EXPECT_TRUE(vertex_triangle_contacts(none, no_ids, no_ids, no_ids, 1.0).empty());
   const Scene points = random_soup(0, 50, 10, 1, {0, 0, 0}, 1);  // vertices, no triangles
-  EXPECT_TRUE(query(points, 5.0, ContactPairs::all).empty());
+  EXPECT_TRUE(triangle_query(points, 5.0, ContactPairs::all).empty());
 }
 
 TEST(VertexTriangleContacts, RejectsBadArguments) {

@@ -23,14 +23,14 @@ using test::max_abs_difference;
 
 using test::nodes_where;
 
-FemModel beam(FemLaw law, double youngs_pa = 3e4, std::array<int, 3> cells = {6, 2, 2}) {
+FemModel implicit_beam(FemLaw law, double youngs_pa = 3e4, std::array<int, 3> cells = {6, 2, 2}) {
   return test::fem_box_model(law, cells, {12, 4, 4}, youngs_pa, 0.3);
 }
 
 TEST(FemImplicitDynamics, FreeFallIsExactForConstantAcceleration) {
   // A rigid translation strains nothing; backward Euler gives v_n = g h n, u_n = g h^2 n (n + 1) / 2.
   for (auto law : {FemLaw::linear, FemLaw::neo_hookean, FemLaw::corotational}) {
-    const FemModel m = beam(law, 3e4, {2, 1, 1});
+    const FemModel m = implicit_beam(law, 3e4, {2, 1, 1});
     FemImplicitOptions o;
     o.gravity = {0, 0, -9810};
     FemImplicitDynamics d(m, o);
@@ -53,7 +53,7 @@ TEST(FemImplicitDynamics, FrameStepsSettleToTheStaticSolutionForEveryLaw) {
   // equilibrium of the same law.
   for (auto law : {FemLaw::linear, FemLaw::stvk, FemLaw::neo_hookean,
                    FemLaw::corotational}) {
-    const FemModel m = beam(law);
+    const FemModel m = implicit_beam(law);
     FemBoundaryConditions bc;
     bc.fixed_nodes = nodes_where(m, 0, 0.0);
     FemLoads loads;
@@ -107,7 +107,7 @@ TEST(FemImplicitDynamics, FrameStepsOnStiffTissueAreStableAndTheEnergyOnlyDecays
   // 1 MPa (cartilage-like, 30 times the heart's stiffness): the explicit critical step is about 2 us;
   // a frame is 8,000 of them. After a release the total energy never grows (backward Euler dissipates).
   for (auto law : {FemLaw::linear, FemLaw::neo_hookean, FemLaw::corotational}) {
-    const FemModel m = beam(law, 1e6);
+    const FemModel m = implicit_beam(law, 1e6);
     const auto e = energies_after_release(m, 0, 0, 30);
     for (std::size_t k = 1; k < e.size(); ++k)  // to round-off (1e-12 of the start)
       EXPECT_LE(e[k], e[k - 1] * (1 + 1e-9) + 1e-12 * e[0]) << fem_law_name(law) << " step " << k;
@@ -119,7 +119,7 @@ TEST(FemImplicitDynamics, FrameStepsOnStiffTissueAreStableAndTheEnergyOnlyDecays
 
 TEST(FemImplicitDynamics, RayleighDampingRemovesEnergyFaster) {
   // A soft beam (3 kPa) whose first mode is slow enough (wh < 1) to ring under backward Euler alone.
-  const FemModel m = beam(FemLaw::neo_hookean, 3e3);
+  const FemModel m = implicit_beam(FemLaw::neo_hookean, 3e3);
   const auto none = energies_after_release(m, 0, 0, 10);
   const auto mass = energies_after_release(m, 20, 0, 10);
   const auto stiff = energies_after_release(m, 0, 0.02, 10);
@@ -131,7 +131,7 @@ TEST(FemImplicitDynamics, RayleighDampingRemovesEnergyFaster) {
 }
 
 TEST(FemImplicitDynamics, AGrabIsHeldAtItsTargetAndComponentSupportsHoldOnlyTheirAxis) {
-  const FemModel m = beam(FemLaw::neo_hookean);
+  const FemModel m = implicit_beam(FemLaw::neo_hookean);
   FemImplicitDynamics d(m);
   // The root on a roller in x only, plus what removes the remaining rigid motions.
   const auto root = nodes_where(m, 0, 0.0);
@@ -160,7 +160,7 @@ TEST(FemImplicitDynamics, AGrabIsHeldAtItsTargetAndComponentSupportsHoldOnlyThei
 }
 
 TEST(FemImplicitDynamics, AFailedStepIsRetriedInHalvesAndPastTheLimitLeavesTheState) {
-  const FemModel m = beam(FemLaw::neo_hookean);
+  const FemModel m = implicit_beam(FemLaw::neo_hookean);
   const auto root = nodes_where(m, 0, 0.0);
   const auto tip = nodes_where(m, 0, 12.0);
   std::vector<double> target(3 * tip.size(), 0.0);
@@ -196,7 +196,7 @@ TEST(FemImplicitDynamics, AFailedStepIsRetriedInHalvesAndPastTheLimitLeavesTheSt
 }
 
 TEST(FemImplicitDynamics, OptionsOutOfRangeNameTheirField) {
-  const FemModel m = beam(FemLaw::linear, 3e4, {2, 1, 1});
+  const FemModel m = implicit_beam(FemLaw::linear, 3e4, {2, 1, 1});
   const auto field_of = [&](const FemImplicitOptions& o) -> std::string {
     try {
       FemImplicitDynamics d(m, o);

@@ -22,7 +22,7 @@ namespace {
 const std::array<int, 3> kRegionCells{8, 8, 4};
 const std::array<double, 3> kRegionSize{16, 16, 8};
 
-FemModel block(FemLaw law = FemLaw::neo_hookean) { return test::fem_box_model(law, kRegionCells, kRegionSize); }
+FemModel region_block(FemLaw law = FemLaw::neo_hookean) { return test::fem_box_model(law, kRegionCells, kRegionSize); }
 
 FemBoundaryConditions base_fixed(const FemModel& m) {
   FemBoundaryConditions bc;
@@ -56,7 +56,7 @@ FemStaticResult full_solve(const FemModel& m, const std::vector<int32_t>& grab, 
 }
 
 TEST(FemLocalRegion, GeodesicDistancesFollowTheEdges) {
-  const FemModel m = block();
+  const FemModel m = region_block();
   const int32_t corner = 0;  // (0, 0, 0)
   const std::vector<double> d = fem_geodesic_distances(m, {corner}, 5.0);
   EXPECT_EQ(d[0], 0.0);
@@ -80,7 +80,7 @@ TEST(FemLocalRegion, GeodesicDistancesFollowTheEdges) {
 
 // (a) Convergence to the full nonlinear solve as R grows; the whole mesh gives it to the tolerance.
 TEST(FemLocalRegion, ConvergesToTheFullNonlinearSolveAsTheRegionGrows) {
-  const FemModel m = block();
+  const FemModel m = region_block();
   const std::vector<int32_t> grab = top_nodes_near(m, 8, 8);
   ASSERT_EQ(grab.size(), 5u);
   const std::vector<double> d = lifted(grab.size(), {0, 0, 2.4});  // 30 % of the height
@@ -109,7 +109,7 @@ TEST(FemLocalRegion, ConvergesToTheFullNonlinearSolveAsTheRegionGrows) {
       EXPECT_NEAR(res.displacements[3 * static_cast<size_t>(grab[g]) + 2], 2.4, 1e-12);
     if (r == 5.0) {
       // Against the linear solve of the whole mesh: no worse with the smallest region.
-      const FemModel linear_model = block(FemLaw::linear);  // the solver keeps a reference to it
+      const FemModel linear_model = region_block(FemLaw::linear);  // the solver keeps a reference to it
       FemLinearStaticSolver lin(linear_model, base_fixed(m));
       linear_error = test::max_abs_difference(lin.solve(grab, d, loads).displacements, full.displacements);
       EXPECT_LE(error, linear_error + 1e-6);
@@ -149,10 +149,10 @@ TEST(FemLocalRegion, ConvergesToTheFullNonlinearSolveAsTheRegionGrows) {
 
 // (b) Under a tiny load the composed field is the linear solution.
 TEST(FemLocalRegion, ATinyLoadGivesTheLinearSolution) {
-  const FemModel m = block();
+  const FemModel m = region_block();
   const std::vector<int32_t> grab = top_nodes_near(m, 8, 8);
   const std::vector<double> d = lifted(grab.size(), {1e-5, 0, 1e-4});
-  const FemModel linear_model = block(FemLaw::linear);  // the solver keeps a reference to it
+  const FemModel linear_model = region_block(FemLaw::linear);  // the solver keeps a reference to it
   FemLinearStaticSolver lin(linear_model, base_fixed(m));
   const FemStaticResult linear = lin.solve(grab, d, {});
   FemLocalRegionOptions o;
@@ -166,7 +166,7 @@ TEST(FemLocalRegion, ATinyLoadGivesTheLinearSolution) {
   EXPECT_LT(local.report().interface_residual, 1e-4 * local.report().tool_load);
 }
 
-ToolInput grab_at(const std::string& label, const Vec3& start, const Vec3& now, double start_s, bool active = true) {
+ToolInput region_grab_at(const std::string& label, const Vec3& start, const Vec3& now, double start_s, bool active = true) {
   ToolInput g;
   g.acts = ToolPrimitive::hold;
   g.label = label;
@@ -202,7 +202,7 @@ std::array<double, 3> region_centroid(const FemEngine& e) {
 
 // (c) The region follows the tools: it rises with a grab that lifts, and moves to another grab.
 TEST(FemLocalRegion, TheRegionFollowsTheTools) {
-  FemModel m = block();
+  FemModel m = region_block();
   FemBoundaryConditions supports = base_fixed(m);
   FemEngine e(std::move(m), std::move(supports), EmbeddedSurface(), {0, 0, 0}, local_options(6));
   ASSERT_NE(e.local_region(), nullptr);
@@ -212,7 +212,7 @@ TEST(FemLocalRegion, TheRegionFollowsTheTools) {
   int32_t nodes = -1;
   for (int f = 0; f <= 3; ++f) {
     const Vec3 now{4, 4, 8 + 0.6 * f};
-    e.equilibrium({grab_at("tools[0] (grab)", a, now, 0), grab_at("tools[1] (grab)", b, b, 1, false)}, 0.1 * f);
+    e.equilibrium({region_grab_at("tools[0] (grab)", a, now, 0), region_grab_at("tools[1] (grab)", b, b, 1, false)}, 0.1 * f);
     const std::vector<uint8_t>& flags = *e.local_region();
     for (const int32_t i : near_a) EXPECT_NE(flags[static_cast<size_t>(i)], kFemOutsideRegion);
     for (const int32_t i : near_b) EXPECT_EQ(flags[static_cast<size_t>(i)], kFemOutsideRegion);
@@ -227,7 +227,7 @@ TEST(FemLocalRegion, TheRegionFollowsTheTools) {
     nodes = static_cast<int32_t>(e.metrics().extra[4]);
   }
   // The first grab released, a second one at b: the region is there now.
-  e.equilibrium({grab_at("tools[0] (grab)", a, a, 0, false), grab_at("tools[1] (grab)", b, {12, 12, 9}, 1)}, 1.0);
+  e.equilibrium({region_grab_at("tools[0] (grab)", a, a, 0, false), region_grab_at("tools[1] (grab)", b, {12, 12, 9}, 1)}, 1.0);
   const std::vector<uint8_t>& flags = *e.local_region();
   for (const int32_t i : near_a) EXPECT_EQ(flags[static_cast<size_t>(i)], kFemOutsideRegion);
   for (const int32_t i : near_b) EXPECT_NE(flags[static_cast<size_t>(i)], kFemOutsideRegion);
@@ -235,8 +235,8 @@ TEST(FemLocalRegion, TheRegionFollowsTheTools) {
   EXPECT_NEAR(c[0], 12, 1.0);
   EXPECT_NEAR(c[1], 12, 1.0);
   // Two grabs at once (a third tool at a): two regions in one node set.
-  e.equilibrium({grab_at("tools[0] (grab)", a, a, 0, false), grab_at("tools[1] (grab)", b, {12, 12, 9}, 1),
-                 grab_at("tools[2] (grab)", a, a, 1.5)},
+  e.equilibrium({region_grab_at("tools[0] (grab)", a, a, 0, false), region_grab_at("tools[1] (grab)", b, {12, 12, 9}, 1),
+                 region_grab_at("tools[2] (grab)", a, a, 1.5)},
                 1.5);
   int both = 0;
   for (const int32_t i : near_a) both += e.local_region()->at(static_cast<size_t>(i)) != kFemOutsideRegion;
@@ -252,7 +252,7 @@ TEST(FemLocalRegion, TheRegionFollowsTheTools) {
 // Each tool may have its own radius (ToolInput::local_region_mm, a scenario tool's local_region_mm): two
 // grabs lifted together, one with a 3 mm region and one with the engine's 6 mm; then the radii swapped.
 TEST(FemLocalRegion, EachToolCanHaveItsOwnRadius) {
-  FemModel m = block();
+  FemModel m = region_block();
   FemBoundaryConditions supports = base_fixed(m);
   FemEngine e(std::move(m), std::move(supports), EmbeddedSurface(), {0, 0, 0}, local_options(6));
   const Vec3 a{4, 4, 8}, b{12, 12, 8};
@@ -267,7 +267,7 @@ TEST(FemLocalRegion, EachToolCanHaveItsOwnRadius) {
     }
     return count;
   };
-  ToolInput ga = grab_at("tools[0] (grab)", a, {4, 4, 8.5}, 0), gb = grab_at("tools[1] (grab)", b, {12, 12, 8.5}, 0);
+  ToolInput ga = region_grab_at("tools[0] (grab)", a, {4, 4, 8.5}, 0), gb = region_grab_at("tools[1] (grab)", b, {12, 12, 8.5}, 0);
   ga.local_region_mm = 3;  // b: 0, the engine's 6 mm
   e.equilibrium({ga, gb}, 0.1);
   const int small_a = around(a), large_b = around(b);
@@ -297,7 +297,7 @@ TEST(FemLocalRegion, EachToolCanHaveItsOwnRadius) {
 
 // Without a local region the engine has no region metrics and no region.
 TEST(FemLocalRegion, AbsentLeavesTheEngineAsItWas) {
-  FemModel m = block();
+  FemModel m = region_block();
   FemBoundaryConditions supports = base_fixed(m);
   FemEngineOptions o;
   o.solver = FemSolver::static_equilibrium;
@@ -317,7 +317,7 @@ TEST(FemLocalRegion, BadInputIsRefusedWithTheField) {
     }
     return "(accepted)";
   };
-  const FemModel m = block();
+  const FemModel m = region_block();
   for (const double r : {0.0, -2.0, std::numeric_limits<double>::quiet_NaN()})
     EXPECT_EQ(engine_field(local_options(r), m, base_fixed(m)).rfind("local_region: ", 0), 0u) << r;
   FemEngineOptions dynamic = local_options(5);

@@ -16,7 +16,7 @@
 namespace ctsurg::sim {
 namespace {
 
-FemModel box() { return test::fem_box_model(FemLaw::linear, {4, 2, 2}, {4, 2, 2}); }
+FemModel tools_box() { return test::fem_box_model(FemLaw::linear, {4, 2, 2}, {4, 2, 2}); }
 
 // The node at (x, y, z) mm.
 int32_t node_at(const FemModel& m, double x, double y, double z) {
@@ -38,7 +38,7 @@ ToolInput grab_at(const Vec3& centre, double radius, bool active = true) {
 }
 
 TEST(FemTools, SphereSelectsTheFreeNodesStrictlyInsideAtTheirCurrentPositions) {
-  const FemModel m = box();
+  const FemModel m = tools_box();
   std::vector<double> u(m.nodes.size(), 0.0);
   std::vector<uint8_t> fixed(static_cast<size_t>(m.node_count()), 0);
   // Radius 1 around (2, 1, 1): only the centre node (the 6 face neighbours are exactly at 1 mm).
@@ -58,7 +58,7 @@ TEST(FemTools, SphereSelectsTheFreeNodesStrictlyInsideAtTheirCurrentPositions) {
 }
 
 TEST(FemTools, GrabHoldsTheCapturedDisplacementPlusTheTravelAndLetsGoForGood) {
-  const FemModel m = box();
+  const FemModel m = tools_box();
   std::vector<std::string> notes;
   FemToolHolds holds(m, std::vector<uint8_t>(static_cast<size_t>(m.node_count()), 0), "s.yaml",
                      [&](const std::string& n) { notes.push_back(n); });
@@ -96,7 +96,7 @@ TEST(FemTools, GrabHoldsTheCapturedDisplacementPlusTheTravelAndLetsGoForGood) {
 }
 
 TEST(FemTools, QuasiStaticCaptureIsWhereAndWhenTheToolStarted) {
-  const FemModel m = box();
+  const FemModel m = tools_box();
   FemToolHolds holds(m, std::vector<uint8_t>(static_cast<size_t>(m.node_count()), 0), "s.yaml");
   const std::vector<double> u(m.nodes.size(), 0.0);
   ToolInput g = grab_at({3, 1, 1}, 0.2);
@@ -110,7 +110,7 @@ TEST(FemTools, QuasiStaticCaptureIsWhereAndWhenTheToolStarted) {
 }
 
 TEST(FemTools, ANodeTwoGrabsHoldFollowsTheLaterOne) {
-  const FemModel m = box();
+  const FemModel m = tools_box();
   FemToolHolds holds(m, std::vector<uint8_t>(static_cast<size_t>(m.node_count()), 0), "s.yaml");
   const std::vector<double> u(m.nodes.size(), 0.0);
   ToolInput a = grab_at({2, 1, 1}, 1.01), b = grab_at({3, 1, 1}, 1.01);
@@ -131,7 +131,7 @@ TEST(FemTools, ANodeTwoGrabsHoldFollowsTheLaterOne) {
 }
 
 TEST(FemTools, ForceIsSharedEquallyAndChangesOnlyWhenItStartsOrEnds) {
-  const FemModel m = box();
+  const FemModel m = tools_box();
   std::vector<uint8_t> fixed(static_cast<size_t>(m.node_count()), 0);
   fixed[static_cast<size_t>(node_at(m, 4, 1, 1))] = kAllAxes;
   FemToolHolds holds(m, fixed, "s.yaml");
@@ -162,7 +162,7 @@ TEST(FemTools, ForceIsSharedEquallyAndChangesOnlyWhenItStartsOrEnds) {
 // A node held in some axes takes the force's other components: a neighbour held in z (a roller) is
 // captured, and the z force is shared by the four nodes free in z, the total kept.
 TEST(FemTools, ForceActsOnTheFreeAxesOfAPartlyHeldNode) {
-  const FemModel m = box();
+  const FemModel m = tools_box();
   std::vector<uint8_t> fixed(static_cast<size_t>(m.node_count()), 0);
   fixed[static_cast<size_t>(node_at(m, 4, 1, 1))] = kAllAxes;
   const int32_t roller = node_at(m, 3, 1, 1);
@@ -187,7 +187,7 @@ TEST(FemTools, ForceActsOnTheFreeAxesOfAPartlyHeldNode) {
 }
 
 TEST(FemTools, SphereOnEmptySpaceIsAnInputErrorNamingTheTool) {
-  const FemModel m = box();
+  const FemModel m = tools_box();
   FemToolHolds holds(m, std::vector<uint8_t>(static_cast<size_t>(m.node_count()), 0), "s.yaml");
   const std::vector<double> u(m.nodes.size(), 0.0);
   std::vector<int32_t> nodes;

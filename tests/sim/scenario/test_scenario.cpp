@@ -368,7 +368,7 @@ TEST(Scenario, MaterialPerLabel) {
   EXPECT_DOUBLE_EQ(s.damping_per_s, 10);
   EXPECT_EQ(ctsurg::sim::model_label(s), "fem mooney_rivlin+neo_hookean (dynamic)");
   expect_error(replaced(base, "5: {preset: liver}", "5: {preset: spleen}"), "f.yaml: material.labels.5.preset: unknown material preset 'spleen'");
-  expect_error(replaced(base, "5: {preset: liver}", "liver: {preset: liver}"), "material.labels.liver: a tet label is a whole number from 1 to 65535");
+  expect_error(replaced(base, "5: {preset: liver}", "liver: {preset: liver}"), "material.labels.liver: a tissue label is a whole number from 1 to 65535");
   expect_error(replaced(base, "5: {preset: liver}", "5: {poisson_ratio: 0.3}"), "material.labels.5: give a preset or youngs_modulus_pa");
   expect_error(replaced(base, "5: {preset: liver}", "5: {preset: liver, poisson_ratio: 0.6}"), "material.labels.5.poisson_ratio: must be in (-1, 0.5)");
   expect_error(replaced(base, "5: {preset: liver}", "5: {preset: liver, damping_per_s: 3}"), "material.labels.5.damping_per_s: unknown key");
@@ -389,7 +389,17 @@ TEST(Scenario, MaterialPerLabel) {
   expect_error(replaced(inclusion, "{sphere: {at_fraction: [0.5, 0.5, 0.5], radius_mm: 8}, ", "{"), "material.inclusions[0].sphere: missing");
   const std::string springs = "ctsurg_scenario: 1\nmodel: {kind: spring_grid, grid: g.h5}\nmaterial: {labels: {1: {preset: kidney}}}\n"
                               "time: {duration_s: 1}\noutput: {trajectory: o.h5}\n";
-  expect_error(springs, "f.yaml: material.labels: only for kind: fem");
+  expect_error(springs, "f.yaml: material.labels: not for kind: spring_grid, whose kernel has one stiffness per spring direction; "
+                       "kind: explicit_springs runs the same grid's springs");
+  // The explicit springs take a material per label and inclusions; the vessel does not.
+  const auto explicit_springs = parse_scenario(replaced(springs, "spring_grid", "explicit_springs"), "f.yaml", "/b");
+  ASSERT_EQ(explicit_springs.label_materials.size(), 1u);
+  EXPECT_EQ(explicit_springs.label_materials[0].material.name, "kidney");
+  expect_error(replaced(springs, "material: {labels: {1: {preset: kidney}}}",
+                        "material: {preset: liver, inclusions: [{sphere: {at_fraction: [0.5, 0.5, 0.5], radius_mm: 8}, preset: tumour}]}"),
+               "f.yaml: material.inclusions: not for kind: spring_grid");
+  expect_error(replaced(springs, "material: {labels: {1: {preset: kidney}}}", "material: {preset: liver, law: linear}"),
+               "f.yaml: material.law: only for kind: fem");
 }
 
 TEST(Scenario, RenderRequestsAreChecked) {

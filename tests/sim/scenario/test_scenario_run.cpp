@@ -24,6 +24,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 
 namespace fs = std::filesystem;
 using namespace ctsurg;
@@ -379,6 +380,88 @@ TEST(ScenarioRun, FemEachLabelItsOwnMaterial) {
   const std::string outside = error_of("{law: linear, youngs_modulus_pa: 10000, inclusions: [{sphere: {position_mm: [0, 0, 0], radius_mm: 2}, "
                                        "preset: tumour}]}");
   EXPECT_NE(outside.find("s.yaml: material.inclusions[0].sphere: holds no element of the tet mesh"), std::string::npos) << outside;
+}
+
+namespace {
+
+// The 16 x 4 x 4 block of 2 mm cells (write_block_files; cell centres x = 12 .. 42 mm) with its halves
+// labelled: 1 for the cells of x < 27 mm, 2 beyond.
+void write_two_label_grid(const fs::path& dir) {
+  ctsurg::sim::test::write_block_files(dir, 16, 4, 4, 2.0);
+  OccupancyGrid g = read_occupancy_grid_file(dir / "grid.h5");
+  for (int64_t k = 0; k < g.label.geometry.dims[2]; ++k)
+    for (int64_t j = 0; j < g.label.geometry.dims[1]; ++j)
+      for (int64_t i = 0; i < g.label.geometry.dims[0]; ++i) {
+        const size_t at = static_cast<size_t>(i + g.label.geometry.dims[0] * (j + g.label.geometry.dims[1] * k));
+        if (g.label.voxels[at] != 0 && g.label.geometry.index_to_world(Eigen::Vector3d(double(i), double(j), double(k))).x() > 27) {
+          g.label.voxels[at] = 2;
+        }
+      }
+  g.label_names = {{1, "soft"}, {2, "stiff"}};
+  fs::remove(dir / "grid.h5");
+  write_occupancy_grid_file(dir / "grid.h5", g, ctsurg::test::test_provenance());
+}
+
+}  // namespace
+
+// Each organ its own material on a spring model (material.labels and inclusions, kind: explicit_springs
+// from a grid): the block's soft left half (label 1) and stiff right half (label 2), the left end held
+// and the right end (the cells within 4.5 mm of x = 42 mm, down to x = 38) pulled 2 mm. The soft half
+// takes the stretch: the last soft cells (x = 26 mm) move 14/15 of the soft half's share of the pull,
+// 15 / (15 + 11 / 4) = 0.85, so 0.79, against 14 / 26 = 0.54 for one material. Two labels of one
+// material are the one-material model (to rounding); an inclusion over the right half is the labels'
+// model; a label without a material, one the grid lacks, and a sphere that holds no cell are refused.
+TEST(ScenarioRun, SpringsEachLabelItsOwnMaterial) {
+  TempDir dir;
+  write_two_label_grid(dir.path());
+  const auto text = [](const std::string& material) {
+    return "ctsurg_scenario: 1\nmodel: {kind: explicit_springs, grid: grid.h5}\nmaterial: " + material + "\n"
+           "fixed: [{box_fraction: {min: [0, 0, 0], max: [0.02, 1, 1]}}]\n"
+           "tools:\n  - grab: {radius_mm: 4.5, path: [{t: 0, position_mm: [42, -15, 35]}, {t: 0.5, offset_mm: [2, 0, 0]}]}\n"
+           "time: {duration_s: 2}\noutput: {trajectory: out.h5, frame_interval_s: 1}\n";
+  };
+  const auto interface_x = [&](const std::string& material) {
+    const Trajectory t = run_scenario(parse_scenario(text(material), dir.path() / "s.yaml", dir.path()));
+    const float* last = t.frame_vertices(t.frame_count() - 1);
+    double sum = 0, pulled = 0;
+    int count = 0, grabbed = 0;
+    for (int64_t v = 0; v < t.vertex_count(); ++v) {
+      const double x = t.rest_vertices[static_cast<size_t>(3 * v)];
+      if (std::abs(x - 26) < 1e-3) sum += double(last[3 * v]) - x, ++count;
+      if (std::abs(x - 42) < 1e-3) pulled += double(last[3 * v]) - x, ++grabbed;
+    }
+    EXPECT_EQ(count, 16);
+    EXPECT_EQ(grabbed, 16);
+    return (sum / count) / (pulled / grabbed);  // the interface's share of the end's displacement
+  };
+  const std::string damped = "damping_per_s: 40, ";
+  const double mixed = interface_x("{" + damped + "labels: {1: {youngs_modulus_pa: 10000}, 2: {youngs_modulus_pa: 40000}}}");
+  const double uniform = interface_x("{" + damped + "labels: {1: {youngs_modulus_pa: 10000}, 2: {youngs_modulus_pa: 10000}}}");
+  const double single = interface_x("{" + damped + "youngs_modulus_pa: 10000}");
+  EXPECT_NEAR(uniform, single, 1e-4);
+  EXPECT_NEAR(uniform, 0.54, 0.08);
+  EXPECT_NEAR(mixed, 0.79, 0.08);
+  EXPECT_GT(mixed, 1.4 * uniform);
+  const double included = interface_x("{" + damped + "youngs_modulus_pa: 10000, inclusions: [{sphere: {position_mm: [50, -15, 35], "
+                                      "radius_mm: 23.5}, youngs_modulus_pa: 40000}]}");
+  EXPECT_NEAR(included, mixed, 1e-4);
+  std::printf("explicit springs, interface share of the pull: one material %.4f (two labels %.4f), soft | 4x stiff %.4f, inclusion %.4f\n",
+              single, uniform, mixed, included);
+  const auto error_of = [&](const std::string& material) -> std::string {
+    try {
+      (void)run_scenario(parse_scenario(text(material), dir.path() / "s.yaml", dir.path()));
+    } catch (const InputError& e) {
+      return e.what();
+    }
+    return "(accepted)";
+  };
+  const std::string missing = error_of("{labels: {1: {youngs_modulus_pa: 10000}}}");
+  EXPECT_NE(missing.find("s.yaml: material.labels: the occupancy grid's label 2 has no material (its labels: 1, 2)"), std::string::npos) << missing;
+  const std::string extra = error_of("{labels: {1: {preset: liver}, 2: {preset: kidney}, 7: {preset: tumour}}}");
+  EXPECT_NE(extra.find("s.yaml: material.labels.7: the occupancy grid"), std::string::npos) << extra;
+  EXPECT_NE(extra.find("has no label 7 (its labels: 1, 2)"), std::string::npos) << extra;
+  const std::string outside = error_of("{youngs_modulus_pa: 10000, inclusions: [{sphere: {position_mm: [0, 0, 0], radius_mm: 2}, preset: tumour}]}");
+  EXPECT_NE(outside.find("s.yaml: material.inclusions[0].sphere: holds no cell of the occupancy grid"), std::string::npos) << outside;
 }
 
 namespace {

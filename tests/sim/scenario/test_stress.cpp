@@ -54,7 +54,7 @@ void write_stress_bar(const fs::path& dir) {
 
 // A scenario on the bar: `model` is the model section's body, `tools` and `time` whole sections. A
 // model body's line "  law: X" (fem_model) goes to the material section, where the law is given.
-std::string bar_scenario(std::string model, std::string material, const std::string& tools, const std::string& time) {
+std::string stress_bar_scenario(std::string model, std::string material, const std::string& tools, const std::string& time) {
   if (const auto at = model.find("  law: "); at != std::string::npos) {
     const auto end = model.find('\n', at) + 1;
     material = model.substr(at, end - at) + material;
@@ -204,7 +204,7 @@ TEST(Stress, NearIncompressibleNu049) {
   double dv[2] = {0, 0};
   int k = 0;
   for (const double nu : {0.3, 0.49}) {
-    const auto s = parse(bar_scenario(fem_model("neo_hookean", "static"), material(nu), grab, time), dir.path(),
+    const auto s = parse(stress_bar_scenario(fem_model("neo_hookean", "static"), material(nu), grab, time), dir.path(),
                          "nu " + std::to_string(nu) + " fem neo_hookean static");
     const Outcome o = expect_completes_or_stops_clearly(s, 20);
     EXPECT_TRUE(o.completed);
@@ -212,11 +212,11 @@ TEST(Stress, NearIncompressibleNu049) {
   }
   EXPECT_LT(dv[1], dv[0]);  // locking aside, nu = 0.49 keeps the volume better
   for (const std::string law : {"linear", "stvk", "neo_hookean"}) {
-    const auto s = parse(bar_scenario(fem_model(law, "dynamic"), material(0.49), grab, time), dir.path(),
+    const auto s = parse(stress_bar_scenario(fem_model(law, "dynamic"), material(0.49), grab, time), dir.path(),
                          "nu 0.49 fem " + law + " dynamic");
     EXPECT_TRUE(expect_completes_or_stops_clearly(s, 20).completed);
   }
-  const auto s = parse(bar_scenario(kGridModel, material(0.49), grab, time), dir.path(), "nu 0.49 spring grid");
+  const auto s = parse(stress_bar_scenario(kGridModel, material(0.49), grab, time), dir.path(), "nu 0.49 spring grid");
   EXPECT_TRUE(expect_completes_or_stops_clearly(s, 20).completed);
 }
 
@@ -235,7 +235,7 @@ TEST(Stress, GrabPulledHalfTheOrganSizeInOneSecond) {
            {"fast grab explicit springs", kExplicitModel},
            {"fast grab fem neo_hookean dynamic", fem_model("neo_hookean", "dynamic")},
            {"fast grab fem neo_hookean static", fem_model("neo_hookean", "static")}}) {
-    auto text = bar_scenario(model, material, grab, time);
+    auto text = stress_bar_scenario(model, material, grab, time);
     const auto s = parse(text, dir.path(), name);
     const Outcome o = expect_completes_or_stops_clearly(s, 3 * 16.0);
     if (o.completed) {
@@ -258,7 +258,7 @@ TEST(Stress, ProbeDrivenThroughTheWall) {
            {"probe through explicit springs", kExplicitModel},
            {"probe through fem neo_hookean dynamic", fem_model("neo_hookean", "dynamic")},
            {"probe through fem linear dynamic", fem_model("linear", "dynamic")}}) {
-    const auto s = parse(bar_scenario(model, material, probe, time), dir.path(), name);
+    const auto s = parse(stress_bar_scenario(model, material, probe, time), dir.path(), name);
     (void)expect_completes_or_stops_clearly(s, 40.0);
   }
 }
@@ -282,7 +282,7 @@ TEST(Stress, CutsIsolatingFreeFloatingFragments) {
   const std::string time = "time:\n  duration_s: 0.1\n";
   for (const auto& [name, model] : std::vector<std::pair<std::string, std::string>>{
            {"fragment spring grid", kGridModel}, {"fragment explicit springs", kExplicitModel}}) {
-    const auto s = parse(bar_scenario(model, material, tools, time) + "gravity_mm_per_s2: [0, 0, -9810]\n", dir.path(), name);
+    const auto s = parse(stress_bar_scenario(model, material, tools, time) + "gravity_mm_per_s2: [0, 0, -9810]\n", dir.path(), name);
     const Outcome o = expect_completes_or_stops_clearly(s, 100.0);
     EXPECT_TRUE(o.completed) << name;
     // Free fall from t ~ 0.02 s to 0.1 s: 0.5 g t^2 = 31 mm undamped; damping 5/s slows it a little.

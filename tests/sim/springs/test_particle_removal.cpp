@@ -102,7 +102,7 @@ TEST(ParticleRemoval, BadInputIsRefused) {
 // The bar fixed at its x = 12 end, with its surface (close_cuts on).
 SpringEngine removal_bar_engine() { return test::liver_block_engine(10, 3, 3, 12.5); }
 
-ToolInput cautery(const Vec3& centre, double rate, bool active = true) { return test::cautery_input(centre, 2.5, rate, active); }
+ToolInput spring_cautery(const Vec3& centre, double rate, bool active = true) { return test::cautery_input(centre, 2.5, rate, active); }
 
 TEST(SpringEngineCautery, RemovesAtItsRateCountsTheVolumeAndClosesTheCrater) {
   SpringEngine e = removal_bar_engine();
@@ -111,7 +111,7 @@ TEST(SpringEngineCautery, RemovesAtItsRateCountsTheVolumeAndClosesTheCrater) {
   const int32_t end = model.particle_at(10, 2, 2);
   // 0.3 of a cell (8 mm^3) a step: the first particle after 4 steps, three after 11 (3.3 cells).
   const double rate = 0.3 * 8.0 / e.dt();
-  const ToolInput tip = cautery({30.1, -16, 34}, rate);
+  const ToolInput tip = spring_cautery({30.1, -16, 34}, rate);
   ASSERT_TRUE(e.step({tip}, 3).stable);
   EXPECT_EQ(e.metrics().removed_volume, 0.0);
   ASSERT_TRUE(e.step({tip}, 1).stable);
@@ -126,7 +126,7 @@ TEST(SpringEngineCautery, RemovesAtItsRateCountsTheVolumeAndClosesTheCrater) {
   EXPECT_GT(m.springs_cut, 0);
   EXPECT_NE(e.triangles().size(), triangles);
   // Off: nothing more goes, and the budget does not carry over to the next touch.
-  ASSERT_TRUE(e.step({cautery({30.1, -16, 34}, rate, false)}, 20).stable);
+  ASSERT_TRUE(e.step({spring_cautery({30.1, -16, 34}, rate, false)}, 20).stable);
   EXPECT_NEAR(e.metrics().removed_volume, 24.0, 1e-4);
   ASSERT_TRUE(e.step({tip}, 3).stable);
   EXPECT_NEAR(e.metrics().removed_volume, 24.0, 1e-4);
@@ -137,14 +137,14 @@ TEST(SpringEngineCautery, RestartGivesBackWhatWasRemoved) {
   SpringEngine e = removal_bar_engine();
   const double rate = 2.2 * 8.0 / e.dt();  // 2.2 cells a step: two go
   e.save_checkpoint();
-  ASSERT_TRUE(e.step({cautery({30.1, -16, 34}, rate)}, 1).stable);
+  ASSERT_TRUE(e.step({spring_cautery({30.1, -16, 34}, rate)}, 1).stable);
   EXPECT_NEAR(e.metrics().removed_volume, 16.0, 1e-4);
   e.restart_halved();
   EXPECT_EQ(e.metrics().removed_volume, 0.0);
   const auto& model = std::get<SpringGridModel>(e.model());
   EXPECT_NE(model.spring_mask[static_cast<size_t>(model.particle_at(10, 2, 2))], 0u);
   // Half the step: 1.1 cells a step now, one goes.
-  ASSERT_TRUE(e.step({cautery({30.1, -16, 34}, rate)}, 1).stable);
+  ASSERT_TRUE(e.step({spring_cautery({30.1, -16, 34}, rate)}, 1).stable);
   EXPECT_NEAR(e.metrics().removed_volume, 8.0, 1e-4);
 }
 
@@ -155,7 +155,7 @@ TEST(SpringEngineCautery, WithoutTheTissuesDensityItIsRefused) {
   o.where = "s.yaml";
   SpringEngine e(std::move(model), std::move(state), EmbeddedSurface(), {0, 0, 0}, o);
   try {
-    (void)e.step({cautery({30, -16, 34}, 100)}, 1);
+    (void)e.step({spring_cautery({30, -16, 34}, 100)}, 1);
     ADD_FAILURE() << "a cautery without the density was accepted";
   } catch (const InputError& err) {
     EXPECT_EQ(err.field(), "tools[0] (cautery)");

@@ -158,6 +158,54 @@ TEST(SpringCalibration, TetEdgeSpringsStoreTheContinuumEnergyInTheMean) {
               mean, lo, hi, energy_ratio(kUniaxial), energy_ratio(kShear));
 }
 
+// Each element its own material (a scenario's material.labels on a spring model). Two tets sharing the
+// face (1, 2, 3): an edge of one tet takes that tet's E V / l^2, a shared edge the sum of both, and each
+// node the density V / 4 of its tets. One material through the per-tet overload is the one-material
+// model bit for bit. On a grid, a spring across two materials is the two half-springs in series.
+TEST(SpringCalibration, EachElementItsOwnMaterial) {
+  TetMesh mesh;
+  mesh.nodes = {0, 0, 0, 2, 0, 0, 0, 2, 0, 0, 0, 2, 2, 2, 2};
+  mesh.tets = {0, 1, 2, 3, 1, 3, 2, 4};
+  mesh.tet_labels = {1, 2};
+  const Material soft{"soft", 10e3, 0.3, 1e-3, ""}, stiff{"stiff", 40e3, 0.3, 2e-3, ""};
+  const ExplicitSpringModel one = calibrated_tet_spring_model(mesh, soft);
+  const ExplicitSpringModel same = calibrated_tet_spring_model(mesh, {soft}, {0, 0});
+  EXPECT_EQ(same.stiffness, one.stiffness);
+  EXPECT_EQ(same.mass, one.mass);
+  const ExplicitSpringModel two = calibrated_tet_spring_model(mesh, {soft, stiff}, {0, 1});
+  const double va = 8.0 / 6, vb = 8.0 / 3;  // |det| / 6 of each tet
+  const auto spring_of = [&](int32_t a, int32_t b) {
+    for (int32_t s = 0; s < two.spring_count(); ++s) {
+      const int32_t i = two.spring_ends[static_cast<size_t>(2 * s)], j = two.spring_ends[static_cast<size_t>(2 * s + 1)];
+      if ((i == a && j == b) || (i == b && j == a)) return static_cast<size_t>(s);
+    }
+    ADD_FAILURE() << "no spring " << a << "-" << b;
+    return size_t{0};
+  };
+  EXPECT_NEAR(two.stiffness[spring_of(0, 1)], 10e3 * va / 4, 1e-3);                       // tet A only, l = 2
+  EXPECT_NEAR(two.stiffness[spring_of(1, 4)], 40e3 * vb / 8, 1e-2);                       // tet B only, l^2 = 8
+  EXPECT_NEAR(two.stiffness[spring_of(1, 2)], (10e3 * va + 40e3 * vb) / 8, 1e-2);        // shared, l^2 = 8
+  EXPECT_NEAR(two.mass[0], 1e-3 * va / 4, 1e-9);
+  EXPECT_NEAR(two.mass[1], (1e-3 * va + 2e-3 * vb) / 4, 1e-9);
+  EXPECT_NEAR(two.mass[4], 2e-3 * vb / 4, 1e-9);
+  EXPECT_THROW(calibrated_tet_spring_model(mesh, {soft}, {0}), InputError);     // one index for two tets
+  EXPECT_THROW(calibrated_tet_spring_model(mesh, {soft}, {0, 1}), InputError);  // no material 1
+  EXPECT_THROW(calibrated_tet_spring_model(mesh, {Material{"bad", -1, 0.3, 1e-3, ""}}, {0, 0}), InputError);
+
+  // Two 2 mm cells side by side: one face spring.
+  const Volume<uint8_t> pair = block_occupancy(2, 1, 1, 2.0);
+  const SpringGridModel grid = build_spring_grid_model(pair, calibrated_grid_material(soft, pair.geometry));
+  ASSERT_EQ(grid.particle_count(), 2);
+  const ExplicitSpringModel across = calibrated_grid_spring_model(grid, {soft, stiff}, {0, 1}, soft.density);
+  ASSERT_EQ(across.spring_count(), 1);
+  EXPECT_NEAR(across.stiffness[0], 0.4 * 2.0 * (2 * 10e3 * 40e3 / 50e3), 1e-2);  // 0.4 h E_series, E_series = 16 kPa
+  EXPECT_NEAR(across.mass[0], grid.mass[0], 1e-12);
+  EXPECT_NEAR(across.mass[1], 2 * grid.mass[1], 1e-9);
+  const ExplicitSpringModel uniform = calibrated_grid_spring_model(grid, {soft}, {0, 0}, soft.density);
+  EXPECT_NEAR(uniform.stiffness[0], explicit_model_from_grid(grid).stiffness[0], 1e-3);
+  EXPECT_THROW(calibrated_grid_spring_model(grid, {soft}, {0, 3}, soft.density), InputError);
+}
+
 TEST(MaterialPresets, NamedPresetsAndBadMaterials) {
   EXPECT_EQ(material_preset("liver").youngs_modulus_pa, 5.5e3);
   EXPECT_EQ(material_preset("myocardium").density, 1.06e-3);

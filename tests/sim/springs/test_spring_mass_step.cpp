@@ -26,7 +26,7 @@ double max_abs_difference(const ParticleState& a, const ParticleState& b) {
   return m;
 }
 
-bool all_finite(const ParticleState& s) {
+bool step_all_finite(const ParticleState& s) {
   for (int32_t i = 0; i < s.count(); ++i)
     if (!std::isfinite(s.x[i]) || !std::isfinite(s.y[i]) || !std::isfinite(s.z[i])) return false;
   return true;
@@ -63,7 +63,7 @@ TEST(SpringMassStep, UndampedEnergyStaysBoundedOver1e5StepsAtTheAutoStep) {
     const double e = energy_over_step(model, s, p);
     low = std::min(low, e), high = std::max(high, e);
   }
-  ASSERT_TRUE(all_finite(s));
+  ASSERT_TRUE(step_all_finite(s));
   // Verlet conserves a shadow energy: the measured energy oscillates below e0 (all potential at the
   // start) by a few percent (order (omega dt)^2, 4 % here) and does not drift; an unstable or
   // energy-pumping step would leave the band within a few hundred steps.
@@ -296,7 +296,7 @@ TEST(SpringMassStep, FixedParticlesStayAndZeroLengthSpringsGiveNoNaN) {
   p.gravity = {0, 0, -1000};
   ParticleNormals normals;
   step(model, s, p, &normals);
-  EXPECT_TRUE(all_finite(s));
+  EXPECT_TRUE(step_all_finite(s));
   EXPECT_FLOAT_EQ(s.x[0], 0);
   EXPECT_FLOAT_EQ(s.z[0], -1000 * 1e-6);
   EXPECT_EQ(s.x[2], 5);

@@ -25,7 +25,7 @@ namespace {
 
 // The InputError's field from f(), or "(accepted)".
 template <typename F>
-std::string field_of(F f, std::string* message = nullptr) {
+std::string suture_field_of(F f, std::string* message = nullptr) {
   try {
     f();
   } catch (const InputError& e) {
@@ -108,14 +108,14 @@ TEST(Suture, StitchesAttachToTheNearestParticlesAtRestAndRefuseBadPoints) {
   EXPECT_NEAR(st[0].offset_b[0], 0.3, 1e-6);
   EXPECT_NEAR(st[0].offset_b[1], 0.5, 1e-6);
   std::string message;
-  EXPECT_EQ(field_of([&] { attach_stitches({{Vec3{0, 0, 0}, Vec3{2, 9, 0}}}, {"tools[1].suture.stitches[0]"}, rest, s, 3, "s.yaml"); },
+  EXPECT_EQ(suture_field_of([&] { attach_stitches({{Vec3{0, 0, 0}, Vec3{2, 9, 0}}}, {"tools[1].suture.stitches[0]"}, rest, s, 3, "s.yaml"); },
                      &message),
             "tools[1].suture.stitches[0].b");
   EXPECT_NE(message.find("s.yaml"), std::string::npos) << message;
   EXPECT_NE(message.find("from the nearest particle"), std::string::npos) << message;
-  EXPECT_EQ(field_of([&] { attach_stitches({{Vec3{0, 0, 0}, Vec3{0.5, 0, 0}}}, {"g"}, rest, s, 3, "s.yaml"); }, &message), "g");
+  EXPECT_EQ(suture_field_of([&] { attach_stitches({{Vec3{0, 0, 0}, Vec3{0.5, 0, 0}}}, {"g"}, rest, s, 3, "s.yaml"); }, &message), "g");
   EXPECT_NE(message.find("same particle"), std::string::npos) << message;
-  EXPECT_EQ(field_of([&] { attach_stitches({{Vec3{0, 0, 0}, Vec3{40, 0, 0}}}, {"h"}, rest, s, 3, "s.yaml"); }, &message), "h");
+  EXPECT_EQ(suture_field_of([&] { attach_stitches({{Vec3{0, 0, 0}, Vec3{40, 0, 0}}}, {"h"}, rest, s, 3, "s.yaml"); }, &message), "h");
   EXPECT_NE(message.find("at most 30 mm"), std::string::npos) << message;
 }
 
@@ -130,7 +130,7 @@ TEST(Suture, AnUnstableStiffnessIsRefusedWithAStepToTry) {
   ToolInput t = suture(0.0, 0.1, 2);
   t.stitch_stiffness_ratio = 100;  // 100 springs' worth on a particle with fewer than 18
   std::string message;
-  EXPECT_EQ(field_of([&] { e.step({ToolInput{}, t}, 1); }, &message), "tools[1] (suture).stiffness_ratio");
+  EXPECT_EQ(suture_field_of([&] { e.step({ToolInput{}, t}, 1); }, &message), "tools[1] (suture).stiffness_ratio");
   EXPECT_NE(message.find("s.yaml"), std::string::npos) << message;
   EXPECT_NE(message.find("time.dt_s <="), std::string::npos) << message;
   // The ratio the message suggests is accepted.
@@ -142,12 +142,12 @@ TEST(Suture, AnUnstableStiffnessIsRefusedWithAStepToTry) {
   SpringEngine f = block_engine();
   cut_through(f);
   t.stitch_stiffness_ratio = 0.95 * ratio;
-  EXPECT_EQ(field_of([&] { f.step({ToolInput{}, t}, 1); }), "(accepted)");
+  EXPECT_EQ(suture_field_of([&] { f.step({ToolInput{}, t}, 1); }), "(accepted)");
   // A stitch point 20 mm off the block.
   SpringEngine g = block_engine();
   ToolInput far = suture(0.0, 0.1, 2);
   far.stitches[2][1] = {19.7, -12.2, 58};
-  EXPECT_EQ(field_of([&] { g.step({ToolInput{}, far}, 1); }, &message), "tools[1].suture.stitches[2].b");
+  EXPECT_EQ(suture_field_of([&] { g.step({ToolInput{}, far}, 1); }, &message), "tools[1].suture.stitches[2].b");
 }
 
 TEST(Suture, StitchesCloseACutBlockToItsRestGapAndStayStable) {

@@ -14,16 +14,16 @@ using namespace ctsurg::sim;
 
 namespace {
 
-struct Bar {
+struct CutBar {
   SpringGridModel model;
   SurfaceMesh mesh;
   SurfaceCoupling coupling;
 };
 
 // 10 x 3 x 3 cells of 2 mm; cell centres x = 12 .. 30 mm.
-Bar bar() {
+CutBar cut_bar() {
   const auto occ = test::block_occupancy(10, 3, 3, 2.0);
-  Bar b{build_spring_grid_model(occ, test::test_material()), test::block_surface(occ), {}};
+  CutBar b{build_spring_grid_model(occ, test::test_material()), test::block_surface(occ), {}};
   b.coupling = couple_surface(b.mesh, b.model.lattice, b.model.cells);
   return b;
 }
@@ -36,7 +36,7 @@ Triangle plane_blade(double x0, bool lower) {
 }  // namespace
 
 TEST(SurfaceCutting, BladeAcrossTheBarOpensTheSurface) {
-  Bar b = bar();
+  CutBar b = cut_bar();
   ParticleState state = b.model.make_state();
   std::vector<uint32_t> tri = b.mesh.triangles;
   const double x0 = 21.3;  // between the cell centres 20 and 22
@@ -80,7 +80,7 @@ TEST(SurfaceCutting, BladeAcrossTheBarOpensTheSurface) {
 }
 
 TEST(SurfaceCutting, BladeBesideTheBarChangesNothing) {
-  Bar b = bar();
+  CutBar b = cut_bar();
   const ParticleState state = b.model.make_state();
   std::vector<uint32_t> tri = b.mesh.triangles;
   const auto before = b.coupling.weights;

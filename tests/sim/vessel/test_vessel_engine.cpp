@@ -27,7 +27,7 @@ std::unique_ptr<VesselEngine> vessel(VesselEngineOptions o = {}) {
   return std::make_unique<VesselEngine>(std::move(chain), fixed, Vec3{0, 0, 0}, o);
 }
 
-ToolInput grab_at(const Vec3& centre, double radius) {
+ToolInput vessel_grab_at(const Vec3& centre, double radius) {
   ToolInput t;
   t.acts = ToolPrimitive::hold;
   t.label = "tools[0] (grab)";
@@ -41,7 +41,7 @@ TEST(VesselEngine, GrabPullsBendsAndTwistsTheVessel) {
   auto e = vessel();
   EXPECT_EQ(e->counts().nodes, 31);
   EXPECT_EQ(e->counts().fixed, 2);
-  std::vector<ToolInput> tools{grab_at({30, 0, 0}, 1.2)};  // the tip atom (and only it)
+  std::vector<ToolInput> tools{vessel_grab_at({30, 0, 0}, 1.2)};  // the tip atom (and only it)
   const int32_t tip = e->chain().branch_atoms.back();
   for (int i = 0; i <= 30; ++i) {
     tools[0].centre = {30, 0, 10.0 * std::min(i, 15) / 15};  // lift 10 mm over 0.25 s, hold
@@ -63,7 +63,7 @@ TEST(VesselEngine, GrabPullsBendsAndTwistsTheVessel) {
 
   // A twist: a grab over the last 5 atoms turning 90 degrees about the vessel's axis.
   auto t = vessel();
-  std::vector<ToolInput> twist{grab_at({28, 0, 0}, 2.2)};
+  std::vector<ToolInput> twist{vessel_grab_at({28, 0, 0}, 2.2)};
   for (int i = 0; i <= 20; ++i) {
     const double a = 0.5 * std::numbers::pi * std::min(i, 10) / 10;
     twist[0].orientation = {std::cos(a / 2), std::sin(a / 2), 0, 0};
@@ -125,7 +125,7 @@ TEST(VesselEngine, ForceBendsAndRefusals) {
   EXPECT_GT(e->dynamics().x[3 * static_cast<size_t>(e->chain().branch_atoms.back()) + 1], 0.01);
 
   auto g = vessel();
-  std::vector<ToolInput> miss{grab_at({15, 10, 0}, 2)};  // 10 mm off the centerline
+  std::vector<ToolInput> miss{vessel_grab_at({15, 10, 0}, 2)};  // 10 mm off the centerline
   try {
     g->step(miss, 1);
     FAIL() << "a grab that captures nothing must be refused";

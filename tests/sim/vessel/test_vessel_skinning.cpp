@@ -25,7 +25,7 @@ using namespace ctsurg::sim;
 using namespace ctsurg::sim::test;
 
 constexpr double kHalfVoxelMm = 0.25;  // half of a 0.5 mm CT voxel
-constexpr double kPi = std::numbers::pi;
+constexpr double kSkinPi = std::numbers::pi;
 
 VesselWall wall() {
   VesselWall w;
@@ -83,7 +83,7 @@ TEST(VesselSkinning, StraightAndCurvedVesselsLieOnTheAnalyticTube) {
     EXPECT_LT(e, kHalfVoxelMm);
     expect_closed(skin.triangles());
     // The volume of a 16-gon prism of circumradius 2 over 40 mm.
-    EXPECT_NEAR(enclosed_volume(v, skin.triangles()), 0.5 * 16 * 4 * std::sin(2 * kPi / 16) * 40, 1e-2);  // float vertices
+    EXPECT_NEAR(enclosed_volume(v, skin.triangles()), 0.5 * 16 * 4 * std::sin(2 * kSkinPi / 16) * 40, 1e-2);  // float vertices
 
     // A quarter circle of radius 20 mm, atoms 1 mm apart along it, radius 2 mm.
     const VesselChain arc = build_vessel_chain(arc_centerline(32, 20, 90, 2.0), {0, 0, 0}, wall(), "t");
@@ -105,7 +105,7 @@ TEST(VesselSkinning, PaperSpokesTwistOnAHelixWhereRotationMinimisingFramesDoNot)
   const double big_r = 6, pitch = 12, step = 0.15;  // rad per atom: about 1 mm apart
   const VesselChain helix = build_vessel_chain(branch_centerline(126, 1.5, [&](double s) {
                                                  const double a = s * step;
-                                                 return std::array<double, 3>{pitch * a / (2 * kPi), big_r * std::cos(a), big_r * std::sin(a)};
+                                                 return std::array<double, 3>{pitch * a / (2 * kSkinPi), big_r * std::cos(a), big_r * std::sin(a)};
                                                }),
                                                {0, 0, 0}, wall(), "t");
   std::vector<float> v;
@@ -235,7 +235,7 @@ TEST(VesselSkinning, FromAStaircaseMaskTheSurfaceLiesWithinHalfAVoxelOfTheMasksS
       double bw = 0;
       for (double t = 6; t <= 28; t += 0.25)
         for (int s = 0; s < 48; ++s) {
-          const double ang = 2 * kPi * s / 48;
+          const double ang = 2 * kSkinPi * s / 48;
           bw = std::max(bw, distance_to_mask_surface(a + t * d + r * (std::cos(ang) * e1 + std::sin(ang) * e2)));
         }
       std::printf("baseline: the analytic tube within %.3f mm of the mask's surface\n", bw);

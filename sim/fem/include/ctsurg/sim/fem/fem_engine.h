@@ -1,6 +1,8 @@
 // The tetrahedral FEM as a simulation engine (base/simulation_engine.h): one model, its fixed nodes,
 // the tools (fem_tools.h: grabs as prescribed displacements, point forces; probes as sphere contact),
-// gravity, and the surface embedded in the tets, advanced in one of two ways:
+// gravity, and the surface embedded in the tets, advanced by one of three integrators (fem_integrator.h,
+// one file each: the engine holds the model, the tools' holds, the cuts, the removals and the surface;
+// the integrator how it steps):
 //
 //   dynamic  explicit central differences (fem_explicit_dynamics.h); the tools are set before every
 //            step (at its end time), and steps go in one call while no tool acts (on cuda: one launch
@@ -46,6 +48,7 @@
 #include "ctsurg/sim/fem/fem_cutting.h"
 #include "ctsurg/sim/fem/fem_explicit_dynamics.h"
 #include "ctsurg/sim/fem/fem_implicit_dynamics.h"
+#include "ctsurg/sim/fem/fem_integrator.h"
 #include "ctsurg/sim/fem/fem_linear_static_solver.h"
 #include "ctsurg/sim/fem/fem_local_region.h"
 #include "ctsurg/sim/fem/fem_model.h"
@@ -128,7 +131,7 @@ class FemEngine final : public SimulationEngine {
   bool engaged(size_t tool) const override { return holds_.engaged(tool); }
   // With local_region_mm: the last frame's region, per node (#N: kFemOutsideRegion, kFemInRegion,
   // kFemRegionInterface of fem_local_region.h); nullptr without.
-  const std::vector<uint8_t>* local_region() const { return local_ ? &local_->node_region() : nullptr; }
+  const std::vector<uint8_t>* local_region() const;
   // With local_region_mm: the last frame's region per surface vertex, each the largest flag of the nodes
   // it is tied to (its tet's corners: a vertex in a tet that touches the interface is drawn on it); the
   // node flags themselves without a surface. All 0 before the first solve. false without a local region.
@@ -145,7 +148,6 @@ class FemEngine final : public SimulationEngine {
   void apply_cuts(const std::vector<ToolInput>& tools);
   void split_nodes(const std::vector<int32_t>& tets, const std::vector<int32_t>& parents, const std::vector<ToolInput>& tools);
   void remove_tissue(const std::vector<ToolInput>& tools, int steps);
-  StabilityReport step_implicit(const std::vector<ToolInput>& tools, int steps);
 
   FemModel model_;
   FemBoundaryConditions supports_;
@@ -162,23 +164,11 @@ class FemEngine final : public SimulationEngine {
   // at its barycentric coordinates (the surface's coupling gives the tet's corners and those).
   std::vector<int32_t> quadratic_nodes_;   // #V x 10
   std::vector<double> quadratic_weights_;  // #V x 10
-  // dynamic: explicit or implicit
-  std::optional<FemExplicitDynamics> dynamics_;
-  std::unique_ptr<FemImplicitDynamics> implicit_;
-  bool had_grab_ = false;
-  // static
-  std::unique_ptr<FemLinearStaticSolver> linear_;
-  std::unique_ptr<FemStaticSolver> static_solver_;
-  std::unique_ptr<FemLocalRegionSolver> local_;
-  std::vector<int32_t> seeds_;  // scratch: the tools' nodes the local region grows from
-  std::vector<double> seed_radii_;  // scratch: each seed's radius (its tool's local_region_mm or the engine's), mm
-  FemBoundaryConditions bc_;
-  double static_time_ = 0;
-  int solves_ = 0, newton_ = 0, cg_ = 0;
+  // How the model advances (fem_integrator.h: explicit, implicit or static, one file each), rebuilt
+  // with the state carried over when a cut or a removal changes the mesh.
+  std::unique_ptr<FemIntegrator> integrator_;
+  int solves_ = 0, newton_ = 0, cg_ = 0;  // static frames solved; the Newton and CG iterations (metrics)
   int64_t steps_ = 0;
-  std::vector<int32_t> grab_nodes_;  // scratch
-  std::vector<double> grab_displacements_;
-  std::vector<InstrumentView> instrument_views_;  // the active instruments at the last step
   // Cutting (fem_cutting.h): the faces separated so far, and each surface vertex's tet and tie corners.
   std::unique_ptr<FemTetSeparation> separation_;
   std::vector<int32_t> surface_element_;  // #V

@@ -152,24 +152,25 @@ struct VesselSpec {
   int newton_iterations = 6;      // Gauss-Newton iterations per step at most, [1, 100]
 };
 
-// kind: fem, material.labels: one tet label's material (its law, preset and values, the law's constants).
-struct LabelMaterial {
-  uint16_t label = 0;
+// One material of a model with several (material.labels, material.inclusions; kind: fem and
+// explicit_springs): its preset and values, and for kind: fem its law and the law's constants.
+struct ElementMaterial {
   Material material;
   FemLaw law = FemLaw::neo_hookean;
   std::array<double, kFemLawConstants> constants{};
-  std::string field;  // "material.labels.2", for messages
+  std::string field;  // "material.labels.2", "material.inclusions[0]": for messages
 };
 
-// kind: fem, material.inclusions: a sphere of another material inside the tissue (a tumour, a
-// calcification): the elements whose centroid lies inside it take its material, over their label's.
-struct InclusionMaterial {
-  PointSpec centre;        // position_mm (LPS) or at_fraction (of the tet mesh's rest bounding box)
+// material.labels: the material of the elements (tets, or grid cells) of one tissue label.
+struct LabelMaterial : ElementMaterial {
+  uint16_t label = 0;
+};
+
+// material.inclusions: a sphere of another material inside the tissue (a tumour, a calcification): the
+// elements whose centroid (tets) or centre (grid cells) lies inside it take its material, over their label's.
+struct InclusionMaterial : ElementMaterial {
+  PointSpec centre;        // position_mm (LPS) or at_fraction (of the tet mesh's or the grid's rest bounding box)
   double radius_mm = 0;    // > 0
-  Material material;
-  FemLaw law = FemLaw::neo_hookean;
-  std::array<double, kFemLawConstants> constants{};
-  std::string field;       // "material.inclusions[0]", for messages
 };
 
 // Bounds of the time section (scenario.cpp): simulated time, the smallest step, output frames.

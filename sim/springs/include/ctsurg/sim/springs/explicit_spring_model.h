@@ -106,6 +106,14 @@ ExplicitSpringModel explicit_model_from_tet_mesh(const TetMesh& mesh, double den
 ExplicitSpringModel explicit_model_from_tet_mesh(const TetMesh& mesh, double density,
                                                  const std::function<double(double volume, double length)>& stiffness,
                                                  double damping = 0);
+// The same with a material per tet (spring_calibration.h's per-label materials): tet t lumps
+// tet_density[t] * V_t / 4 (g/mm^3 * mm^3) onto each node, and `volume` passed to stiffness() is the
+// weighted volume sum over the edge's tets of tet_weight[t] * V_t. Both vectors #T; densities > 0.
+// With every weight 1 and one density this is the overload above, to the bit.
+ExplicitSpringModel explicit_model_from_tet_mesh(const TetMesh& mesh, const std::vector<double>& tet_density,
+                                                 const std::vector<double>& tet_weight,
+                                                 const std::function<double(double volume, double length)>& stiffness,
+                                                 double damping = 0);
 
 // Cuts spring s (clears its alive flag and its entries in the CPU layout). Returns false when it was
 // already cut. Cut springs only through this function or spring_cutting.h, so the layout follows.

@@ -42,4 +42,20 @@ SpringGridMaterial calibrated_grid_material(const Material& material, const Imag
 // positive volume.
 ExplicitSpringModel calibrated_tet_spring_model(const TetMesh& mesh, const Material& material);
 
+// Each organ its own material (a scenario's material.labels and material.inclusions on a spring model):
+// `materials` indexed by element. Materials are validated; InputError("material", ...) names the first
+// bad one, InputError("materials", ...) an index out of range or a vector of the wrong size.
+//
+// Tets: tet t of materials[tet_material[t]] lumps its density * V_t / 4 onto each node, and edge ij
+// gets k_ij = sum_t E_t V_t / l_ij^2 over its tets (the calibration above, tet by tet).
+ExplicitSpringModel calibrated_tet_spring_model(const TetMesh& mesh, const std::vector<Material>& materials,
+                                                const std::vector<int32_t>& tet_material);
+// A grid's springs as an explicit model (explicit_model_from_grid) with particle p of
+// materials[particle_material[p]]: its mass grid.mass[p] * density / grid_density (grid_density: the
+// density the grid model was built with, g/mm^3), and the spring between cells a and b two half-springs
+// in series, one in each cell: k = grid_spring_stiffness(2 E_a E_b / (E_a + E_b)), which is k = 0.4 E h
+// inside one tissue and the series stiffness across an interface. Damping stays the grid's.
+ExplicitSpringModel calibrated_grid_spring_model(const SpringGridModel& grid, const std::vector<Material>& materials,
+                                                 const std::vector<int32_t>& particle_material, double grid_density);
+
 }  // namespace ctsurg::sim
