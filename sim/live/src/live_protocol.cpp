@@ -9,6 +9,7 @@
 #include <cstring>
 #include <set>
 #include <string>
+#include <variant>
 
 namespace ctsurg::sim {
 
@@ -149,6 +150,82 @@ LiveMessage parse_live_message(std::string_view text, const LiveProtocolLimits& 
     refuse("type", "must be begin, move, end, pause, resume, reset or save");
   }
   return out;
+}
+
+namespace {
+
+// One JSON object per server message; nlohmann::json keeps its keys sorted, so the text does not
+// depend on the order they are listed in.
+json server_message_json(const LiveHello& m) {
+  json h{{"type", "hello"},
+         {"scenario", m.scenario},
+         {"model", m.model},
+         {"vertex_count", m.vertex_count},
+         {"triangle_count", m.triangle_count},
+         {"bounds", m.bounds},
+         {"margin_mm", m.margin_mm},
+         {"dt_s", m.dt_s},
+         {"colour", m.colour},
+         {"uvs", m.uvs},
+         {"normal_map", nullptr},
+         {"tools", {{"grab_radius_mm", m.grab_radius_mm}, {"probe_radius_mm", m.probe_radius_mm}, {"cut_depth_mm", m.cut_depth_mm}}},
+         {"save_to", nullptr},
+         {"library", m.library},
+         {"version", m.version}};
+  if (m.normal_map) h["normal_map"] = {{"width", (*m.normal_map)[0]}, {"height", (*m.normal_map)[1]}};
+  if (m.save_to) h["save_to"] = {{"scenario", (*m.save_to)[0]}, {"trajectory", (*m.save_to)[1]}};
+  return h;
+}
+
+json server_message_json(const LiveBegan& m) {
+  json b{{"type", "began"}, {"id", m.id}};
+  if (m.seq) b["seq"] = *m.seq;
+  return b;
+}
+
+json server_message_json(const LiveEnded& m) { return {{"type", "ended"}, {"id", m.id}, {"why", m.why}}; }
+
+json server_message_json(const LiveStatus& m) {
+  return {{"type", "status"},
+          {"time_s", m.time_s},
+          {"steps", m.steps},
+          {"dt_s", m.dt_s},
+          {"rtf", m.rtf},
+          {"pictures_per_s", m.pictures_per_s},
+          {"paused", m.paused},
+          {"stopped", m.stopped},
+          {"halvings", m.halvings},
+          {"frames_recorded", m.frames_recorded},
+          {"frame_bytes", m.frame_bytes}};
+}
+
+json server_message_json(const LiveGuard& m) {
+  const char* action = "halved";
+  switch (m.action) {
+    case LiveGuard::Action::halved: action = "halved"; break;
+    case LiveGuard::Action::stopped: action = "stopped"; break;
+  }
+  return {{"type", "guard"}, {"action", action}, {"message", m.message}};
+}
+
+json server_message_json(const LiveError& m) {
+  json e{{"type", "error"}, {"message", m.message}};
+  if (m.seq) e["seq"] = *m.seq;
+  return e;
+}
+
+json server_message_json(const LiveSaved& m) {
+  json s{{"type", "saved"}, {"scenario", m.scenario}, {"trajectory", m.trajectory}, {"frames", m.frames}, {"time_s", m.time_s}};
+  if (m.seq) s["seq"] = *m.seq;
+  return s;
+}
+
+json server_message_json(const LiveClosed& m) { return {{"type", "closed"}, {"message", m.message}}; }
+
+}  // namespace
+
+std::string encode_live_server_message(const LiveServerMessage& message) {
+  return std::visit([](const auto& m) { return server_message_json(m).dump(); }, message);
 }
 
 std::vector<uint8_t> encode_live_frame(const LiveFrame& f) {

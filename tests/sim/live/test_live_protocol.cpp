@@ -1,6 +1,7 @@
 // Tests for ctsurg/sim/live/live_protocol.h: every client message parsed; malformed, oversized and
 // out-of-range messages refused with the field named; random and mutated bytes only ever parsed or
-// refused (an InputError, never another exception); binary frames round-trip bit for bit, with and
+// refused (an InputError, never another exception); every server text message encoded to its exact
+// JSON text, with its numbers read back bit for bit; binary frames round-trip bit for bit, with and
 // without triangles, and damaged frames are refused.
 #include "ctsurg/sim/live/live_protocol.h"
 
@@ -8,8 +9,10 @@
 #include "test_support.h"
 
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <span>
 #include <random>
@@ -219,4 +222,82 @@ TEST(LiveProtocol, AFrameWithoutVerticesDecodesAndEncodesBack) {
   LiveFrame empty;
   empty.flags = LiveFrame::triangles_follow;
   EXPECT_EQ(decode_live_frame(encode_live_frame(empty)).triangle_count, 0u);
+}
+
+// The text of each server message, exactly: keys in alphabetical order, integers as integers, doubles
+// as doubles, "seq" only when given. (The same text ctsurg-live assembled before its messages were
+// typed: a scripted session's messages were compared byte for byte before and after.)
+TEST(LiveProtocol, ServerMessagesEncodeToTheirExactText) {
+  LiveHello h;
+  h.scenario = "live bar";
+  h.model = "spring_grid, 3 surface vertices";
+  h.vertex_count = 3;
+  h.triangle_count = 1;
+  h.bounds = {11, -19, 31, 43, -11, 39};
+  h.margin_mm = 20;
+  h.dt_s = 0.001;
+  h.colour = {0.5, 0.25, 0.125};
+  h.grab_radius_mm = 8;
+  h.probe_radius_mm = 6;
+  h.cut_depth_mm = 15;
+  h.library = "three 0.187.0";
+  h.version = "ctsurg 0.1.0";
+  EXPECT_EQ(encode_live_server_message(h),
+            R"({"bounds":[11.0,-19.0,31.0,43.0,-11.0,39.0],"colour":[0.5,0.25,0.125],"dt_s":0.001,)"
+            R"("library":"three 0.187.0","margin_mm":20.0,"model":"spring_grid, 3 surface vertices","normal_map":null,)"
+            R"("save_to":null,"scenario":"live bar","tools":{"cut_depth_mm":15.0,"grab_radius_mm":8.0,"probe_radius_mm":6.0},)"
+            R"("triangle_count":1,"type":"hello","uvs":false,"version":"ctsurg 0.1.0","vertex_count":3})");
+  h.uvs = true;
+  h.normal_map = std::array<int, 2>{256, 128};
+  h.save_to = std::array<std::string, 2>{"/tmp/s \"1\".yaml", "/tmp/s.h5"};
+  EXPECT_EQ(encode_live_server_message(h),
+            R"({"bounds":[11.0,-19.0,31.0,43.0,-11.0,39.0],"colour":[0.5,0.25,0.125],"dt_s":0.001,)"
+            R"("library":"three 0.187.0","margin_mm":20.0,"model":"spring_grid, 3 surface vertices",)"
+            R"("normal_map":{"height":128,"width":256},"save_to":{"scenario":"/tmp/s \"1\".yaml","trajectory":"/tmp/s.h5"},)"
+            R"("scenario":"live bar","tools":{"cut_depth_mm":15.0,"grab_radius_mm":8.0,"probe_radius_mm":6.0},)"
+            R"("triangle_count":1,"type":"hello","uvs":true,"version":"ctsurg 0.1.0","vertex_count":3})");
+  EXPECT_EQ(encode_live_server_message(LiveBegan{0, 5}), R"({"id":0,"seq":5,"type":"began"})");
+  EXPECT_EQ(encode_live_server_message(LiveBegan{3, std::nullopt}), R"({"id":3,"type":"began"})");
+  EXPECT_EQ(encode_live_server_message(LiveEnded{2, "the session was reset"}),
+            R"({"id":2,"type":"ended","why":"the session was reset"})");
+  EXPECT_EQ(encode_live_server_message(LiveStatus{0.25, 250, 0.001, 0.5, 59.5, true, "", 1, 26, 1592}),
+            R"({"dt_s":0.001,"frame_bytes":1592,"frames_recorded":26,"halvings":1,"paused":true,"pictures_per_s":59.5,)"
+            R"("rtf":0.5,"steps":250,"stopped":"","time_s":0.25,"type":"status"})");
+  EXPECT_EQ(encode_live_server_message(LiveGuard{LiveGuard::Action::halved, "step halved to 0.5 ms"}),
+            R"({"action":"halved","message":"step halved to 0.5 ms","type":"guard"})");
+  EXPECT_EQ(encode_live_server_message(LiveGuard{LiveGuard::Action::stopped, "unstable"}),
+            R"({"action":"stopped","message":"unstable","type":"guard"})");
+  EXPECT_EQ(encode_live_server_message(LiveError{"message: (text): not JSON", std::nullopt}),
+            R"({"message":"message: (text): not JSON","type":"error"})");
+  EXPECT_EQ(encode_live_server_message(LiveError{"message: id: 7 is not a tool this page holds", 4000000000u}),
+            R"({"message":"message: id: 7 is not a tool this page holds","seq":4000000000,"type":"error"})");
+  EXPECT_EQ(encode_live_server_message(LiveSaved{"/tmp/s.yaml", "/tmp/s.h5", 7, 0.125, 14}),
+            R"({"frames":7,"scenario":"/tmp/s.yaml","seq":14,"time_s":0.125,"trajectory":"/tmp/s.h5","type":"saved"})");
+  EXPECT_EQ(encode_live_server_message(LiveSaved{"a.yaml", "a.h5", 0, 0, std::nullopt}),
+            R"({"frames":0,"scenario":"a.yaml","time_s":0.0,"trajectory":"a.h5","type":"saved"})");
+  EXPECT_EQ(encode_live_server_message(LiveClosed{"another browser"}), R"({"message":"another browser","type":"closed"})");
+}
+
+// What the page reads back (JSON.parse, like nlohmann's parser here) is what the server had: every
+// double bit for bit, whatever its size, and the integers exactly up to their types' limits.
+TEST(LiveProtocol, ServerMessagesNumbersReadBackBitForBit) {
+  std::mt19937_64 rng(31);
+  std::uniform_real_distribution<double> exponent(-300, 300), mantissa(-1, 1);
+  for (int n = 0; n < 2000; ++n) {
+    const auto any_double = [&] { return mantissa(rng) * std::pow(10.0, exponent(rng)); };
+    const LiveStatus s{any_double(), static_cast<int64_t>(rng()), any_double(), any_double(), any_double(),
+                       n % 2 == 0, "stopped \u00b5 \"quoted\"\n", static_cast<int>(rng() % 1000), INT64_MAX - n, SIZE_MAX - n};
+    const nlohmann::json back = nlohmann::json::parse(encode_live_server_message(s));
+    ASSERT_EQ(back["type"], "status");
+    EXPECT_EQ(back["time_s"].get<double>(), s.time_s);
+    EXPECT_EQ(back["steps"].get<int64_t>(), s.steps);
+    EXPECT_EQ(back["dt_s"].get<double>(), s.dt_s);
+    EXPECT_EQ(back["rtf"].get<double>(), s.rtf);
+    EXPECT_EQ(back["pictures_per_s"].get<double>(), s.pictures_per_s);
+    EXPECT_EQ(back["paused"].get<bool>(), s.paused);
+    EXPECT_EQ(back["stopped"].get<std::string>(), s.stopped);
+    EXPECT_EQ(back["halvings"].get<int>(), s.halvings);
+    EXPECT_EQ(back["frames_recorded"].get<int64_t>(), s.frames_recorded);
+    EXPECT_EQ(back["frame_bytes"].get<size_t>(), s.frame_bytes);
+  }
 }

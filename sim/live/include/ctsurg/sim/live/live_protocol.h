@@ -1,7 +1,8 @@
 // The live session's wire protocol (issue 22): what a browser page sends (JSON text messages, checked
-// strictly) and what it receives (binary frames of the surface). No networking here: a server reads a
-// WebSocket text message, parse_live_message() turns it into a LiveMessage or refuses it, and
-// encode_live_frame() makes the binary message it sends back.
+// strictly) and what it receives (JSON text messages and binary frames of the surface), each direction
+// a typed message with one codec. No networking here: a server reads a WebSocket text message,
+// parse_live_message() turns it into a LiveMessage or refuses it; what it sends back is a
+// LiveServerMessage (encode_live_server_message()) or a LiveFrame (encode_live_frame()).
 //
 // Client -> server: one JSON object per message, at most limits.max_bytes bytes (4 KiB), no other key
 // than listed (positions LPS mm, finite, inside the model's rest bounding box enlarged by
@@ -21,7 +22,23 @@
 // "(text)" for what is not JSON or too long) and what is wrong; nothing a client sends makes the parser
 // crash (tests/sim/live/test_live_protocol.cpp feeds it 20,000 random and mutated messages).
 //
-// Server -> client: a binary frame, little-endian, a 48-byte header then the data:
+// Server -> client, JSON text: one object per message, its keys in alphabetical order (as nlohmann::json
+// writes them; the page reads them by name). "seq" is there only when the message it answers had one.
+//
+//   {"type": "hello", "scenario", "model", "vertex_count", "triangle_count", "bounds": [6], "margin_mm",
+//    "dt_s", "colour": [r, g, b], "uvs": bool, "normal_map": null | {"width", "height"},
+//    "tools": {"grab_radius_mm", "probe_radius_mm", "cut_depth_mm"},
+//    "save_to": null | {"scenario", "trajectory"}, "library", "version"}     (on connecting)
+//   {"type": "began", "id": n, "seq"}                     (a begin applied: the tool's id)
+//   {"type": "ended", "id": n, "why": text}               (a tool the server let go: reset, stop)
+//   {"type": "status", "time_s", "steps", "dt_s", "rtf", "pictures_per_s", "paused", "stopped": text,
+//    "halvings", "frames_recorded", "frame_bytes"}        (about four times a second)
+//   {"type": "guard", "action": "halved" | "stopped", "message": text}
+//   {"type": "error", "message": text, "seq"}             (a message refused)
+//   {"type": "saved", "scenario", "trajectory", "frames", "time_s", "seq"}
+//   {"type": "closed", "message": text}                   (the last message before the server closes)
+//
+// Server -> client: a binary frame, little-endian, a 56-byte header then the data:
 //
 //   offset  bytes  type     field
 //        0      4  char[4]  magic "CTLF"
@@ -47,8 +64,11 @@
 
 #include <array>
 #include <cstdint>
+#include <optional>
 #include <span>
+#include <string>
 #include <string_view>
+#include <variant>
 #include <vector>
 
 namespace ctsurg::sim {
@@ -94,6 +114,67 @@ struct LiveFrame {
   std::vector<float> positions;      // V x 3, LPS mm
   std::vector<uint32_t> triangles;   // F x 3 when flags has triangles_follow, else empty
 };
+
+// Server -> client text messages (layout above). Numbers keep their C++ type on the wire: an integer
+// field is written as an integer, a double as a double.
+struct LiveHello {
+  std::string scenario;                    // the scenario's name
+  std::string model;                       // a line saying what the model is
+  size_t vertex_count = 0, triangle_count = 0;  // the surface's V and F now
+  std::array<double, 6> bounds{};          // the rest box, LPS mm: min xyz, max xyz
+  double margin_mm = 0;                    // positions may lie this far outside bounds
+  double dt_s = 0;                         // the engine's step, s
+  std::array<double, 3> colour{};          // the tissue's colour, linear RGB 0..1
+  bool uvs = false;                        // uvs.bin is served
+  std::optional<std::array<int, 2>> normal_map;  // normal_map.bin's width and height, when served
+  double grab_radius_mm = 0, probe_radius_mm = 0, cut_depth_mm = 0;  // the page's tool defaults
+  std::optional<std::array<std::string, 2>> save_to;  // where a save writes: scenario, trajectory
+  std::string library;                     // the WebGL library, e.g. "three 0.187.0"
+  std::string version;                     // e.g. "ctsurg 0.1.0"
+};
+struct LiveBegan {
+  int id = 0;                              // the tool's id (move and end name it)
+  std::optional<uint32_t> seq;             // the begin's seq
+};
+struct LiveEnded {
+  int id = 0;
+  std::string why;
+};
+struct LiveStatus {
+  double time_s = 0;                       // simulated
+  int64_t steps = 0;
+  double dt_s = 0;
+  double rtf = 0;                          // simulated s per wall s over the last ~second
+  double pictures_per_s = 0;               // frames written to the socket over the last ~second
+  bool paused = false;
+  std::string stopped;                     // the guard's message when it stopped the session, else ""
+  int halvings = 0;                        // step halvings so far
+  int64_t frames_recorded = 0;
+  size_t frame_bytes = 0;                  // the last frame's size
+};
+struct LiveGuard {
+  enum class Action { halved, stopped };   // the step was halved (the session goes on) | the session stopped
+  Action action = Action::halved;
+  std::string message;
+};
+struct LiveError {
+  std::string message;                     // InputError's text: field and problem
+  std::optional<uint32_t> seq;             // the refused message's seq, when it was read
+};
+struct LiveSaved {
+  std::string scenario, trajectory;        // the files written
+  int64_t frames = 0;                      // recorded frames
+  double time_s = 0;                       // simulated
+  std::optional<uint32_t> seq;             // the save's seq
+};
+struct LiveClosed {
+  std::string message;                     // why the server closes the socket
+};
+using LiveServerMessage =
+    std::variant<LiveHello, LiveBegan, LiveEnded, LiveStatus, LiveGuard, LiveError, LiveSaved, LiveClosed>;
+
+// The message's JSON text (layout above), what the server sends as one WebSocket text message.
+std::string encode_live_server_message(const LiveServerMessage& message);
 
 // The frame's bytes (layout above); triangles are written when flags has triangles_follow.
 std::vector<uint8_t> encode_live_frame(const LiveFrame& frame);

@@ -1,5 +1,8 @@
 // ctsurg-live's web server (issue 22): serves the live page (sim/live/page, embedded at build time)
-// and runs one LiveSession in real time for the browser that opens it.
+// and runs one LiveSession in real time for the browser that opens it. Its parts, in sim/live/src:
+// live_http.h (HTTP and its checks), live_websocket.h (the sockets), live_session_pump.h (the
+// simulation thread); live_server.cpp wires them. What goes over the socket is typed both ways
+// (live_protocol.h).
 //
 // Threads. The calling thread of run() does the networking (Boost.Asio, one thread: HTTP requests and
 // WebSocket reads and writes). A simulation thread owns the session: it takes the page's messages
