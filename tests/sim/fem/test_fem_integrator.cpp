@@ -42,15 +42,25 @@ FemEngineOptions integrator_options(FemSolver solver) {
   return o;
 }
 
+// The Neo-Hookean bar, its end at x = 0 fixed, and the tools' holds over it.
+struct IntegratorBar {
+  FemModel model = test::fem_box_model(FemLaw::neo_hookean, kIntegratorCells, kIntegratorSize);
+  FemBoundaryConditions supports{test::nodes_where(model, 0, 0.0), {}, {}, {}};
+  FemToolHolds holds{model, held_axes(), "s.yaml"};
+  std::vector<uint8_t> held_axes() const {
+    std::vector<uint8_t> held(static_cast<size_t>(model.node_count()), 0);
+    for (const int32_t n : supports.fixed_nodes) held[static_cast<size_t>(n)] = kAllAxes;
+    return held;
+  }
+};
+
 // Steps `total` steps of the dynamic integrator for `solver`, rebuilding it after `rebuild_at` steps
 // with its carried state (rebuild_at = 0: never); the displacements at the end.
 std::vector<double> stepped(FemSolver solver, int total, int rebuild_at) {
-  const FemModel model = test::fem_box_model(FemLaw::neo_hookean, kIntegratorCells, kIntegratorSize);
-  FemBoundaryConditions supports;
-  supports.fixed_nodes = test::nodes_where(model, 0, 0.0);
-  std::vector<uint8_t> held(static_cast<size_t>(model.node_count()), 0);
-  for (const int32_t n : supports.fixed_nodes) held[static_cast<size_t>(n)] = kAllAxes;
-  FemToolHolds holds(model, held, "s.yaml");
+  IntegratorBar bar;
+  const FemModel& model = bar.model;
+  const FemBoundaryConditions& supports = bar.supports;
+  FemToolHolds& holds = bar.holds;
   const FemEngineOptions o = integrator_options(solver);
   std::unique_ptr<FemIntegrator> integrator = make_fem_integrator(model, supports, o, Backend::cpu);
   std::vector<double> u(model.nodes.size(), 0.0);
@@ -113,12 +123,10 @@ TEST(FemIntegrator, ARebuiltDynamicIntegratorContinuesWhereItWas) {
 }
 
 TEST(FemIntegrator, TheStaticSequenceSolvesFramesAndCarriesItsTime) {
-  const FemModel model = test::fem_box_model(FemLaw::neo_hookean, kIntegratorCells, kIntegratorSize);
-  FemBoundaryConditions supports;
-  supports.fixed_nodes = test::nodes_where(model, 0, 0.0);
-  std::vector<uint8_t> held(static_cast<size_t>(model.node_count()), 0);
-  for (const int32_t n : supports.fixed_nodes) held[static_cast<size_t>(n)] = kAllAxes;
-  FemToolHolds holds(model, held, "s.yaml");
+  IntegratorBar bar;
+  const FemModel& model = bar.model;
+  const FemBoundaryConditions& supports = bar.supports;
+  FemToolHolds& holds = bar.holds;
   const FemEngineOptions o = integrator_options(FemSolver::static_equilibrium);
   auto quasi = make_fem_integrator(model, supports, o, Backend::cpu);
   std::vector<double> u(model.nodes.size(), 0.0);

@@ -272,6 +272,16 @@ TEST(ScenarioRun, FemStaticAndDynamicAgreeAndTheGrabIsPrescribed) {
 
 namespace {
 
+// What running the scenario `text` (as dir/s.yaml) is refused with, or "(accepted)".
+std::string run_refusal(const std::string& text, const fs::path& dir) {
+  try {
+    (void)run_scenario(parse_scenario(text, dir / "s.yaml", dir));
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "(accepted)";
+}
+
 // The bar's tet mesh (write_bar_tet_mesh) with its halves labelled: 1 where a tet's centroid has x < 27
 // mm, 2 beyond.
 void write_two_label_bar(const fs::path& dir) {
@@ -364,14 +374,7 @@ TEST(ScenarioRun, FemEachLabelItsOwnMaterial) {
                                      "radius_mm: 5}, youngs_modulus_pa: 40000}]}");
   EXPECT_GT(smaller, 1.02 * uniform);
   EXPECT_LT(smaller, mixed);
-  const auto error_of = [&](const std::string& material) -> std::string {
-    try {
-      (void)run_scenario(parse_scenario(text(material), dir.path() / "s.yaml", dir.path()));
-    } catch (const InputError& e) {
-      return e.what();
-    }
-    return "(accepted)";
-  };
+  const auto error_of = [&](const std::string& material) { return run_refusal(text(material), dir.path()); };
   const std::string missing = error_of("{law: linear, labels: {1: {youngs_modulus_pa: 10000}}}");
   EXPECT_NE(missing.find("s.yaml: material.labels: the tet mesh's label 2 has no material (its labels: 1, 2)"), std::string::npos) << missing;
   const std::string extra = error_of("{law: linear, labels: {1: {preset: liver}, 2: {preset: kidney}, 7: {preset: tumour}}}");
@@ -447,14 +450,7 @@ TEST(ScenarioRun, SpringsEachLabelItsOwnMaterial) {
   EXPECT_NEAR(included, mixed, 1e-4);
   std::printf("explicit springs, interface share of the pull: one material %.4f (two labels %.4f), soft | 4x stiff %.4f, inclusion %.4f\n",
               single, uniform, mixed, included);
-  const auto error_of = [&](const std::string& material) -> std::string {
-    try {
-      (void)run_scenario(parse_scenario(text(material), dir.path() / "s.yaml", dir.path()));
-    } catch (const InputError& e) {
-      return e.what();
-    }
-    return "(accepted)";
-  };
+  const auto error_of = [&](const std::string& material) { return run_refusal(text(material), dir.path()); };
   const std::string missing = error_of("{labels: {1: {youngs_modulus_pa: 10000}}}");
   EXPECT_NE(missing.find("s.yaml: material.labels: the occupancy grid's label 2 has no material (its labels: 1, 2)"), std::string::npos) << missing;
   const std::string extra = error_of("{labels: {1: {preset: liver}, 2: {preset: kidney}, 7: {preset: tumour}}}");
