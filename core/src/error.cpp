@@ -1,6 +1,14 @@
 #include "ctsurg/core/error.h"
 
+#include <sstream>
+
 namespace ctsurg {
+
+std::string message_number(double v) {
+  std::ostringstream s;
+  s << v;
+  return s.str();
+}
 
 namespace {
 std::string compose(const std::string& file, const std::string& field, const std::string& problem) {

@@ -15,7 +15,7 @@ namespace ctsurg {
 namespace {
 
 // What a non-regular file is, for the message.
-std::string kind_of(mode_t mode) {
+std::string input_kind_of(mode_t mode) {
   if (S_ISDIR(mode)) return "a folder";
   if (S_ISFIFO(mode)) return "a FIFO (named pipe)";
   if (S_ISSOCK(mode)) return "a socket";
@@ -33,7 +33,7 @@ void check_input_file(const std::filesystem::path& path, bool allow_empty) {
     if (errno == ENOENT || errno == ENOTDIR) throw InputError(name, "", "file does not exist");
     throw InputError(name, "", std::string("cannot be read: ") + std::strerror(errno));
   }
-  if (!S_ISREG(st.st_mode)) throw InputError(name, "", "is " + kind_of(st.st_mode) + ", expected a file");
+  if (!S_ISREG(st.st_mode)) throw InputError(name, "", "is " + input_kind_of(st.st_mode) + ", expected a file");
   // O_NONBLOCK: never wait on the file while checking it (it is regular, but be safe against races).
   const int fd = ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC);
   if (fd < 0) throw InputError(name, "", std::string("cannot be opened: ") + std::strerror(errno));

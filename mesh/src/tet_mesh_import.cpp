@@ -34,7 +34,7 @@ struct RawMesh {
   std::string format;
 };
 
-std::string read_all(const std::filesystem::path& path) {
+std::string read_import_file(const std::filesystem::path& path) {
   std::ifstream in(path, std::ios::binary);
   std::ostringstream s;
   s << in.rdbuf();
@@ -490,7 +490,7 @@ TetMeshImport import_tet_mesh(const std::filesystem::path& path) {
   const std::string format = tet_mesh_import_format(path);
   if (format.empty()) throw InputError(file, "suffix", "unknown tet mesh format; use .vtu, .msh or .mesh");
   check_input_file(path);
-  const std::string text = read_all(path);
+  const std::string text = read_import_file(path);
   RawMesh raw = format == "vtu" ? read_vtu(text, file) : format == "msh" ? read_gmsh(text, file) : read_medit(text, file);
   const int64_t nn = static_cast<int64_t>(raw.nodes.size() / 3), nt = static_cast<int64_t>(raw.tets.size() / 4);
   if (nt == 0) throw InputError(file, "tets", fmt::format("no 4-node tetrahedra ({} other cells)", raw.skipped));

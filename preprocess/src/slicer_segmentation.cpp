@@ -41,7 +41,7 @@ struct NrrdHeader {
   std::size_t data_offset = 0;                   // first byte after the blank line
 };
 
-NrrdHeader parse_header(const std::string& bytes, const std::string& file) {
+NrrdHeader parse_seg_header(const std::string& bytes, const std::string& file) {
   if (bytes.compare(0, 4, "NRRD") != 0) throw InputError(file, "magic", "not a NRRD file (no NRRD000x first line)");
   NrrdHeader h;
   std::size_t at = bytes.find('\n');
@@ -186,7 +186,7 @@ SlicerSegmentation read_slicer_segmentation(const std::filesystem::path& path, s
     if (!in && !in.eof()) throw RuntimeError(file + ": read failed");
     bytes = s.str();
   }
-  const NrrdHeader h = parse_header(bytes, file);
+  const NrrdHeader h = parse_seg_header(bytes, file);
   if (h.fields.count("data file") || h.fields.count("datafile")) {
     throw InputError(file, "data file", "detached data is not supported for a .seg.nrrd (Slicer writes attached data)");
   }

@@ -187,7 +187,7 @@ std::string uri_encode(const std::string& name) {
   return out;
 }
 
-void append_u32(std::string& s, uint32_t v) { s.append(reinterpret_cast<const char*>(&v), 4); }
+void append_gltf_u32(std::string& s, uint32_t v) { s.append(reinterpret_cast<const char*>(&v), 4); }
 
 }  // namespace
 
@@ -497,11 +497,11 @@ std::vector<std::pair<std::string, std::string>> export_gltf_animation(const std
   std::string text = j.dump();
   while (text.size() % 4 != 0) text.push_back(' ');
   std::string glb = "glTF";
-  append_u32(glb, 2);
-  append_u32(glb, static_cast<uint32_t>(12 + 8 + text.size() + 8 + b.bin.size()));
-  append_u32(glb, static_cast<uint32_t>(text.size()));
+  append_gltf_u32(glb, 2);
+  append_gltf_u32(glb, static_cast<uint32_t>(12 + 8 + text.size() + 8 + b.bin.size()));
+  append_gltf_u32(glb, static_cast<uint32_t>(text.size()));
   glb += "JSON" + text;
-  append_u32(glb, static_cast<uint32_t>(b.bin.size()));
+  append_gltf_u32(glb, static_cast<uint32_t>(b.bin.size()));
   glb += std::string("BIN\0", 4);
   glb += b.bin;
   files.emplace_back(name, std::move(glb));

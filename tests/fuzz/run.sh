@@ -4,7 +4,7 @@
 # for SECONDS (default 10), two at a time. Exit 1 when any target finds a crash, a sanitizer report,
 # a leak of its refusals, a timeout (10 s for one input) or an out-of-memory (2 GiB); the inputs
 # that did are in build-fuzz/findings/ and each becomes a regression test (tests/fuzz/README.md).
-# CI runs it for 10 s a target after the release suite; bench/fuzz.sh runs it for longer.
+# CI runs it for 6 s a target after the release suite; bench/fuzz.sh runs it for longer.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 seconds=${1:-10}

@@ -1,6 +1,8 @@
 #!/usr/bin/env python3
 """check_unity_names.py TESTS_DIR: the names each test file defines at file scope (helpers, constants,
-types in its anonymous namespace) must differ from every other file's of the same test program.
+types in its anonymous namespace) must differ from every other file's of the same test program; and the
+names each library source (*/src/**/*.cpp beside TESTS_DIR) defines in its anonymous namespace must
+differ from every other library source's.
 
 The test programs compile in unity batches of eight (tests/CMakeLists.txt): two files of one batch that
 define the same name do not compile, and two that overload one can silently call each other's. Which
@@ -9,7 +11,10 @@ this check finds every such pair now, whatever the batches. It reads the program
 tests/**/CMakeLists.txt (ctsurg_add_tests(<program> ... SOURCES ...)) and the names from the lines that
 start a declaration at column 0 (a function, a variable, a struct, class or enum); using-declarations
 and aliases are left out (redeclaring one alias to the same type is allowed). Exit 1, naming each name and
-its files, when two files of a program share one."""
+its files, when two files of a program share one. The libraries compile in unity batches too (cmake/
+CtsurgUnityBuild.cmake), and the fuzz build batches files of several libraries together
+(tests/fuzz/CMakeLists.txt), so a library source's file-local names are checked against the whole tree.
+"""
 import collections
 import glob
 import os
@@ -41,9 +46,32 @@ for program, files in sorted(programs.items()):
         if len(paths) > 1:
             shared += 1
             print(f"{program}: '{name}' is defined at file scope in {', '.join(sorted(paths))}: give each file its own name")
+# Library sources: the names in each file's anonymous namespace (from "namespace {" to its closing
+# "}  // namespace" at column 0), against every other library source.
+project = os.path.dirname(os.path.abspath(root))
+local_owners = collections.defaultdict(set)
+for path in glob.glob(os.path.join(project, "*", "**", "src", "**", "*.cpp"), recursive=True):
+    relative = os.path.relpath(path, project)
+    if relative.split(os.sep)[0].startswith("build") or relative.startswith("tests" + os.sep):
+        continue
+    anonymous = False
+    for line in open(path, encoding="utf-8", errors="replace"):
+        if line.startswith("namespace {"):
+            anonymous = True
+        elif anonymous and line.startswith("}  // namespace"):
+            anonymous = False
+        elif anonymous and line and line[0] not in " \t#/}" and not line.startswith(("namespace", "using", "template", "extern")):
+            m = type_name.match(line) or declaration.match(line)
+            if m and m.group(1) not in ("main", "operator"):
+                local_owners[m.group(1)].add(relative)
+for name, paths in sorted(local_owners.items()):
+    if len(paths) > 1:
+        shared += 1
+        print(f"libraries: '{name}' is defined in the anonymous namespace of {', '.join(sorted(paths))}: give each file its own name")
 if not programs:
     print(f"no test program found under {root}")
     sys.exit(1)
 if shared:
     sys.exit(1)
-print(f"{sum(len(f) for f in programs.values())} test files of {len(programs)} programs: every file-scope name is its file's own")
+print(f"{sum(len(f) for f in programs.values())} test files of {len(programs)} programs and the library sources: every file-scope name is "
+      "its file's own")

@@ -7,16 +7,6 @@
 
 namespace ctsurg::sim {
 
-namespace {
-
-std::string number(double v) {
-  std::ostringstream s;
-  s << v;
-  return s.str();
-}
-
-}  // namespace
-
 const std::vector<Material>& material_presets() {
   // Densities: ICRU Report 46 (1992), adult heart, liver and kidney 1.05-1.06 g/cm^3. Moduli: small-
   // strain values from in vivo elastography and ex vivo tests; each tissue's reported range spans a
@@ -59,7 +49,7 @@ void validate_material(const Material& m, const std::string& file) {
   if (!(std::isfinite(m.youngs_modulus_pa) && m.youngs_modulus_pa >= kMinYoungsModulusPa &&
         m.youngs_modulus_pa <= kMaxYoungsModulusPa)) {
     throw InputError(file, "material.youngs_modulus_pa",
-                     "must be from 1 Pa to 1e11 Pa (soft tissue is 1e2 .. 1e6 Pa), got " + number(m.youngs_modulus_pa));
+                     "must be from 1 Pa to 1e11 Pa (soft tissue is 1e2 .. 1e6 Pa), got " + message_number(m.youngs_modulus_pa));
   }
   if (!(std::isfinite(m.poisson_ratio) && m.poisson_ratio > -1 && m.poisson_ratio < 0.5)) {
     throw InputError(file, "material.poisson_ratio",
@@ -68,7 +58,7 @@ void validate_material(const Material& m, const std::string& file) {
   }
   if (!(std::isfinite(m.density) && m.density >= 1e-5 && m.density <= 2.5e-2)) {
     throw InputError(file, "material.density_g_per_cm3",
-                     "must be from 0.01 to 25 g/cm^3 (tissue is about 1.05), got " + number(m.density * 1e3));
+                     "must be from 0.01 to 25 g/cm^3 (tissue is about 1.05), got " + message_number(m.density * 1e3));
   }
 }
 

@@ -29,11 +29,6 @@ struct ProblemOf {
   }
 };
 
-std::string number(double v) {
-  std::ostringstream s;
-  s << v;
-  return s.str();
-}
 
 // mu and lambda of E and nu (unchecked: validate_fem_material's callers and it itself).
 LameParameters lame_of(double e, double nu) { return {e / (2 * (1 + nu)), e * nu / ((1 + nu) * (1 - 2 * nu))}; }
@@ -108,9 +103,9 @@ void check_law_problem(const FemMaterial& m, const char* where) {
   if (p.problem == nullptr) return;
   std::string constants;
   const FemLawInfo& info = fem_law_info(m.law);
-  for (int i = 0; i < info.constant_count; ++i) constants += std::string(", ") + info.constant_names[i] + " " + number(m.constants[static_cast<size_t>(i)]);
-  throw InputError(where, p.field, std::string(p.problem) + " (mu " + number(k.mu) + " Pa, lambda " + number(k.lambda) + " Pa at poisson_ratio " +
-                                       number(nu) + constants + ")");
+  for (int i = 0; i < info.constant_count; ++i) constants += std::string(", ") + info.constant_names[i] + " " + message_number(m.constants[static_cast<size_t>(i)]);
+  throw InputError(where, p.field, std::string(p.problem) + " (mu " + message_number(k.mu) + " Pa, lambda " + message_number(k.lambda) + " Pa at poisson_ratio " +
+                                       message_number(nu) + constants + ")");
 }
 
 }  // namespace
@@ -130,20 +125,20 @@ void validate_fem_material(const FemMaterial& m, const char* where) {
   for (int i = 0; i < kFemLawConstants; ++i) {
     const double c = m.constants[static_cast<size_t>(i)];
     if (i >= info.constant_count) {
-      if (c != 0) throw InputError(where, "constants", std::string(info.name) + " reads " + std::to_string(info.constant_count) + " constants; constant " + std::to_string(i) + " is " + number(c));
+      if (c != 0) throw InputError(where, "constants", std::string(info.name) + " reads " + std::to_string(info.constant_count) + " constants; constant " + std::to_string(i) + " is " + message_number(c));
       continue;
     }
     if (!(std::isfinite(c) && c >= 0))
-      throw InputError(where, info.constant_names[i], std::string(info.name) + "'s " + info.constant_names[i] + " must be finite and >= 0 Pa, got " + number(c));
+      throw InputError(where, info.constant_names[i], std::string(info.name) + "'s " + info.constant_names[i] + " must be finite and >= 0 Pa, got " + message_number(c));
   }
   if (const auto e = fem_youngs_modulus_from_constants(m.law, m.constants, m.poisson_ratio)) {
     if (!(*e > 0)) {
       throw InputError(where, info.constant_names[0], std::string(info.name) + "'s constants give no stiffness (small-strain shear modulus " +
-                                                          number(*e / (2 * (1 + m.poisson_ratio))) + " Pa)");
+                                                          message_number(*e / (2 * (1 + m.poisson_ratio))) + " Pa)");
     }
     if (std::abs(m.youngs_modulus - *e) > 1e-9 * *e) {
-      throw InputError(where, "youngs_modulus", std::string(info.name) + "'s stiffness is set by its constants (E = " + number(*e) + " Pa); got " +
-                                                    number(m.youngs_modulus));
+      throw InputError(where, "youngs_modulus", std::string(info.name) + "'s stiffness is set by its constants (E = " + message_number(*e) + " Pa); got " +
+                                                    message_number(m.youngs_modulus));
     }
   }
   check_law_problem(m, where);

@@ -76,7 +76,7 @@ void only(const json& m, std::set<std::string> keys) {
 }
 
 template <typename T>
-void put(std::vector<uint8_t>& out, size_t at, T value) {
+void put_le(std::vector<uint8_t>& out, size_t at, T value) {
   std::memcpy(out.data() + at, &value, sizeof value);
 }
 
@@ -238,16 +238,16 @@ std::vector<uint8_t> encode_live_frame(const LiveFrame& f) {
   const size_t nv = f.positions.size() / 3;
   std::vector<uint8_t> out(LiveFrame::kHeaderBytes + 4 * f.positions.size() + (tris ? 4 * f.triangles.size() : 0));
   std::memcpy(out.data(), "CTLF", 4);
-  put<uint16_t>(out, 4, LiveFrame::kVersion);
-  put<uint16_t>(out, 6, f.flags);
-  put<uint64_t>(out, 8, f.frame);
-  put<double>(out, 16, f.time_s);
-  put<int64_t>(out, 24, f.steps);
-  put<uint64_t>(out, 32, f.topology_version);
-  put<uint32_t>(out, 40, static_cast<uint32_t>(nv));
-  put<uint32_t>(out, 44, f.triangle_count);
-  put<uint32_t>(out, 48, f.seq);
-  put<uint32_t>(out, 52, 0);
+  put_le<uint16_t>(out, 4, LiveFrame::kVersion);
+  put_le<uint16_t>(out, 6, f.flags);
+  put_le<uint64_t>(out, 8, f.frame);
+  put_le<double>(out, 16, f.time_s);
+  put_le<int64_t>(out, 24, f.steps);
+  put_le<uint64_t>(out, 32, f.topology_version);
+  put_le<uint32_t>(out, 40, static_cast<uint32_t>(nv));
+  put_le<uint32_t>(out, 44, f.triangle_count);
+  put_le<uint32_t>(out, 48, f.seq);
+  put_le<uint32_t>(out, 52, 0);
   // An empty vector's data() may be null, and memcpy from null is undefined even for 0 bytes (a fuzz
   // finding: tests/fuzz_regressions/README.md): no copy without data.
   if (!f.positions.empty()) std::memcpy(out.data() + LiveFrame::kHeaderBytes, f.positions.data(), 4 * f.positions.size());

@@ -11,7 +11,7 @@
 namespace ctsurg::sim {
 namespace {
 
-SphereView sphere_view(const std::array<double, 3>& centre, double radius, const char* where) {
+SphereView sphere_tool_view(const std::array<double, 3>& centre, double radius, const char* where) {
   for (double c : centre)
     if (!std::isfinite(c)) throw InputError(where, "centre", "must be finite");
   if (!(std::isfinite(radius) && radius > 0)) throw InputError(where, "radius", "must be finite and > 0, got " + std::to_string(radius));
@@ -21,7 +21,7 @@ SphereView sphere_view(const std::array<double, 3>& centre, double radius, const
 }  // namespace
 
 Grab grab_particles_in_sphere(const ParticleState& state, const Sphere& tool, int threads) {
-  const SphereView s = sphere_view(tool.centre, tool.radius, "grab");
+  const SphereView s = sphere_tool_view(tool.centre, tool.radius, "grab");
   std::vector<uint8_t> inside(static_cast<std::size_t>(state.count()));
   cpu::grabbable(state.x.data(), state.y.data(), state.z.data(), state.inv_mass.data(), state.count(), s, inside.data(),
                  threads);
@@ -40,13 +40,13 @@ void apply_grab(ParticleState& state, const Grab& grab, const std::array<double,
   if (grab.offsets.size() != 3 * grab.particles.size()) throw InputError("grab", "offsets", "expected 3 per grabbed particle");
   for (int32_t p : grab.particles)
     if (p < 0 || p >= state.count()) throw InputError("grab", "particles", "id " + std::to_string(p) + " out of range");
-  const SphereView s = sphere_view(centre, 1.0, "grab");
+  const SphereView s = sphere_tool_view(centre, 1.0, "grab");
   cpu::place_grabbed(state.x.data(), state.y.data(), state.z.data(), grab.particles.data(), grab.offsets.data(),
                      static_cast<int64_t>(grab.particles.size()), s, threads);
 }
 
 int64_t probe_sphere(ParticleState& state, const Sphere& tool, int threads) {
-  const SphereView s = sphere_view(tool.centre, tool.radius, "probe");
+  const SphereView s = sphere_tool_view(tool.centre, tool.radius, "probe");
   return cpu::probe(state.x.data(), state.y.data(), state.z.data(), state.inv_mass.data(), state.count(), s, threads);
 }
 

@@ -21,7 +21,7 @@ TriangleView triangle_view(const Triangle& t) {
   return v;
 }
 
-void check_state(int32_t model_count, const ParticleState& state) {
+void check_cut_state(int32_t model_count, const ParticleState& state) {
   if (state.count() != model_count)
     throw InputError("cut", "state", "has " + std::to_string(state.count()) + " particles, the model " + std::to_string(model_count));
 }
@@ -29,7 +29,7 @@ void check_state(int32_t model_count, const ParticleState& state) {
 }  // namespace
 
 int64_t cut_springs_crossing_triangle(SpringGridModel& model, const ParticleState& state, const Triangle& blade, int threads) {
-  check_state(model.particle_count(), state);
+  check_cut_state(model.particle_count(), state);
   const int64_t ends = cpu::cut_grid(model.view(), model.spring_mask.data(), state.x.data(), state.y.data(),
                                      state.z.data(), triangle_view(blade), threads);
   return ends / 2;  // both particles of a cut spring clear their bit
@@ -37,7 +37,7 @@ int64_t cut_springs_crossing_triangle(SpringGridModel& model, const ParticleStat
 
 int64_t cut_springs_crossing_triangle(ExplicitSpringModel& model, const ParticleState& state, const Triangle& blade,
                                       int threads) {
-  check_state(model.particle_count(), state);
+  check_cut_state(model.particle_count(), state);
   const int64_t cut = cpu::cut_explicit(model.spring_ends.data(), model.alive.data(), model.spring_count(),
                                        state.x.data(), state.y.data(), state.z.data(), triangle_view(blade), threads);
   if (cut > 0) sync_cut_springs(model);

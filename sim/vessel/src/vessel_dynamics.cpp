@@ -40,7 +40,7 @@ struct VesselDynamics::Solver {
 
 namespace {
 
-void put(std::vector<double>& a, size_t i, const V3& v) { a[3 * i] = v.x(), a[3 * i + 1] = v.y(), a[3 * i + 2] = v.z(); }
+void put_entry(std::vector<double>& a, size_t i, const V3& v) { a[3 * i] = v.x(), a[3 * i + 1] = v.y(), a[3 * i + 2] = v.z(); }
 
 }  // namespace
 
@@ -147,7 +147,7 @@ void VesselDynamics::clear_prescribed() {
 
 void VesselDynamics::cut_segment(int32_t s) {
   alive_[static_cast<size_t>(s)] = 0;
-  put(w, static_cast<size_t>(s), V3::Zero());
+  put_entry(w, static_cast<size_t>(s), V3::Zero());
 }
 
 bool VesselDynamics::held_segment(size_t s) const { return fixed_segment_[s] || prescribed_segment_[s] || !alive_[s]; }
@@ -269,7 +269,7 @@ int VesselDynamics::newton(bool inertia, const std::vector<double>& x_pred, cons
     double largest = 0;
     for (size_t a = 0; a < na; ++a) {
       const V3 d = s.delta.segment<3>(3 * static_cast<Eigen::Index>(a));
-      put(x, a, at(x, a) + d);
+      put_entry(x, a, at(x, a) + d);
       largest = std::max(largest, d.norm());
     }
     for (size_t k = 0; k < ns; ++k) {
@@ -292,9 +292,9 @@ int VesselDynamics::step() {
   std::vector<double> x_pred(3 * na);
   std::vector<Quaternion> q_pred(ns);
   for (size_t a = 0; a < na; ++a) {
-    put(x_pred, a, at(x, a) + dt * at(v, a));
-    if (fixed_atom_[a]) put(x_pred, a, at(x, a));
-    if (prescribed_atom_[a]) put(x_pred, a, at(prescribed_x_, a));
+    put_entry(x_pred, a, at(x, a) + dt * at(v, a));
+    if (fixed_atom_[a]) put_entry(x_pred, a, at(x, a));
+    if (prescribed_atom_[a]) put_entry(x_pred, a, at(prescribed_x_, a));
   }
   for (size_t k = 0; k < ns; ++k) {
     q_pred[k] = to_quaternion((rotation_exp(dt * at(w, k)) * to_eigen(q[k])).normalized());
@@ -305,9 +305,9 @@ int VesselDynamics::step() {
   q = q_pred;
   const int it = newton(true, x_pred, q_pred, options_.max_newton_iterations);
   const double keep = 1 / (1 + options_.mass_damping * dt);
-  for (size_t a = 0; a < na; ++a) put(v, a, keep / dt * (at(x, a) - at(x_old, a)));
+  for (size_t a = 0; a < na; ++a) put_entry(v, a, keep / dt * (at(x, a) - at(x_old, a)));
   for (size_t k = 0; k < ns; ++k) {
-    put(w, k, alive_[k] ? V3(keep / dt * rotation_log(to_eigen(q[k]) * to_eigen(q_old[k]).conjugate())) : V3::Zero());
+    put_entry(w, k, alive_[k] ? V3(keep / dt * rotation_log(to_eigen(q[k]) * to_eigen(q_old[k]).conjugate())) : V3::Zero());
   }
   return it;
 }
@@ -315,7 +315,7 @@ int VesselDynamics::step() {
 int VesselDynamics::solve_static(int max_iterations) {
   const size_t na = static_cast<size_t>(chain_.atom_count()), ns = static_cast<size_t>(chain_.segment_count());
   for (size_t a = 0; a < na; ++a)
-    if (prescribed_atom_[a]) put(x, a, at(prescribed_x_, a));
+    if (prescribed_atom_[a]) put_entry(x, a, at(prescribed_x_, a));
   for (size_t k = 0; k < ns; ++k)
     if (prescribed_segment_[k]) q[k] = prescribed_q_[k];
   const int it = newton(false, x, q, max_iterations);

@@ -13,7 +13,7 @@ namespace {
 
 V3 eig(const Vec3& v) { return {v[0], v[1], v[2]}; }
 
-std::string lps_text(const Vec3& local, const Vec3& origin) {
+std::string vessel_lps_text(const Vec3& local, const Vec3& origin) {
   char text[96];
   std::snprintf(text, sizeof text, "(%.1f, %.1f, %.1f) mm LPS", local[0] + origin[0], local[1] + origin[1], local[2] + origin[2]);
   return text;
@@ -85,7 +85,7 @@ void VesselEngine::apply_tools(const std::vector<ToolInput>& tools) {
           if (h.atoms.empty()) {
             throw InputError(options_.where, tool.label,
                              "captures no atom of the vessel at t = " + std::to_string(time_) + " s (sphere of radius " +
-                                 std::to_string(tool.radius_mm) + " mm at " + lps_text(tool.centre, origin_) +
+                                 std::to_string(tool.radius_mm) + " mm at " + vessel_lps_text(tool.centre, origin_) +
                                  "; the atoms are on the centerline, fixed ones are not grabbed): move it onto the "
                                  "centerline, make it larger or set snap_to_tissue: true");
           }
@@ -130,7 +130,7 @@ void VesselEngine::apply_tools(const std::vector<ToolInput>& tools) {
           h.atoms = atoms_in_sphere(tool.centre, tool.radius_mm, true);
           if (h.atoms.empty()) {
             throw InputError(options_.where, tool.label, "the force's sphere holds no free atom of the vessel at t = " +
-                                                             std::to_string(time_) + " s (at " + lps_text(tool.centre, origin_) +
+                                                             std::to_string(time_) + " s (at " + vessel_lps_text(tool.centre, origin_) +
                                                              "); move it onto the centerline or set snap_to_tissue: true");
           }
           note(tool.label + ": force shared by " + std::to_string(h.atoms.size()) + " atoms");
@@ -257,7 +257,7 @@ StabilityReport VesselEngine::check_stability() {
       r.stable = false;
       r.particle = a;
       const Vec3 rest{chain_->rest[3 * static_cast<size_t>(a)], chain_->rest[3 * static_cast<size_t>(a) + 1], chain_->rest[3 * static_cast<size_t>(a) + 2]};
-      r.message = "vessel: atom " + std::to_string(a) + " (rest " + lps_text(rest, origin_) + ") is " +
+      r.message = "vessel: atom " + std::to_string(a) + " (rest " + vessel_lps_text(rest, origin_) + ") is " +
                   (p.allFinite() ? "more than 10 m away" : "not finite") + " at t = " + std::to_string(time_) + " s; try dt_s " +
                   std::to_string(0.5 * dt());
       return r;

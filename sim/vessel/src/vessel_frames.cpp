@@ -5,10 +5,10 @@
 namespace ctsurg::sim {
 namespace {
 
-double dot(const double* a, const double* b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+double frame_dot(const double* a, const double* b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
 
 void normalise(double* v) {
-  const double n = std::sqrt(dot(v, v));
+  const double n = std::sqrt(frame_dot(v, v));
   if (n > 0) v[0] /= n, v[1] /= n, v[2] /= n;
 }
 
@@ -30,7 +30,7 @@ Vec3 plane_spoke(const Vec3& t) {
 
 void rotation_minimizing_normals(const double* p, const double* t, size_t n, const Vec3& u0, double* u) {
   if (n == 0) return;
-  const double d0 = dot(u0.data(), t);
+  const double d0 = frame_dot(u0.data(), t);
   for (size_t c = 0; c < 3; ++c) u[c] = u0[c] - d0 * t[c];
   normalise(u);
   for (size_t i = 0; i + 1 < n; ++i) {
@@ -39,16 +39,16 @@ void rotation_minimizing_normals(const double* p, const double* t, size_t n, con
     const double* tn = t + 3 * (i + 1);
     double v1[3], rl[3], tl[3], v2[3];
     for (size_t c = 0; c < 3; ++c) v1[c] = p[3 * (i + 1) + c] - p[3 * i + c];
-    const double c1 = dot(v1, v1);
-    const double a = c1 > 0 ? 2 / c1 * dot(v1, r) : 0, b = c1 > 0 ? 2 / c1 * dot(v1, ti) : 0;
+    const double c1 = frame_dot(v1, v1);
+    const double a = c1 > 0 ? 2 / c1 * frame_dot(v1, r) : 0, b = c1 > 0 ? 2 / c1 * frame_dot(v1, ti) : 0;
     for (size_t c = 0; c < 3; ++c) rl[c] = r[c] - a * v1[c], tl[c] = ti[c] - b * v1[c];
     for (size_t c = 0; c < 3; ++c) v2[c] = tn[c] - tl[c];
-    const double c2 = dot(v2, v2);
-    const double e = c2 > 1e-30 ? 2 / c2 * dot(v2, rl) : 0;
+    const double c2 = frame_dot(v2, v2);
+    const double e = c2 > 1e-30 ? 2 / c2 * frame_dot(v2, rl) : 0;
     double* out = u + 3 * (i + 1);
     for (size_t c = 0; c < 3; ++c) out[c] = rl[c] - e * v2[c];
     // Keep it exactly perpendicular and unit (the reflections preserve both up to rounding).
-    const double d = dot(out, tn);
+    const double d = frame_dot(out, tn);
     for (size_t c = 0; c < 3; ++c) out[c] -= d * tn[c];
     normalise(out);
   }

@@ -7,6 +7,9 @@
 
 namespace ctsurg {
 
+// A number as a message shows it ("got -1.5"): the stream's default form, 6 significant digits.
+std::string message_number(double v);
+
 // Bad input: a file, a field of it, or an option is missing, malformed or out of range.
 // The message names the file (or option), the field and the problem:
 //   "heart.nii.gz: pixdim[1]: spacing must be positive, got -1.5"
