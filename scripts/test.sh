@@ -5,5 +5,5 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 scripts/install-deps.sh
-scripts/build.sh
+scripts/build.sh --tests  # the tools and the test programs; the benchmarks build with scripts/build.sh or bench/run.sh
 ctest --preset release ${CTSURG_TEST_ARGS:-}
