@@ -219,15 +219,13 @@ ScenarioEngine spring_engine(const Scenario& s, Backend backend, const std::func
     } else {
       // A particle takes the material of its cell's label (/grid/label: the cell's dominant tissue).
       const int32_t n = grid_model->particle_count();
-      const int64_t cells = static_cast<int64_t>(grid.label.voxels.size());
       std::vector<uint16_t> particle_label(static_cast<size_t>(n), 0);
       if (!s.label_materials.empty()) {
         if (grid.label.geometry.dims != grid.occupancy.geometry.dims) {
           throw InputError(sfile, "material.labels", "the occupancy grid " + s.grid.string() + " has no /grid/label on its lattice");
         }
         for (int32_t p = 0; p < n; ++p) {
-          const int64_t c = grid_model->cells[static_cast<size_t>(p)];
-          if (c >= 0 && c < cells) particle_label[static_cast<size_t>(p)] = grid.label.voxels[static_cast<size_t>(c)];
+          particle_label[static_cast<size_t>(p)] = grid.label.voxels[static_cast<size_t>(grid_model->cells[static_cast<size_t>(p)])];
         }
       }
       const std::vector<int32_t> label_index = label_material_index(s, particle_label, "the occupancy grid", s.grid.string());
