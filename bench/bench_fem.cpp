@@ -111,11 +111,13 @@ BENCHMARK(BM_FemStaticLinear)->ArgsProduct({{9, 12, 14, 16}, {0, 1}})->Unit(benc
 // first factorisations), then each iteration is one quasi-static frame: the grab 0.1 mm further
 // (2.0, 2.1, ... 2.9, 2.0, ... mm), warm-started from the previous frame. Counters: Newton
 // iterations and factorisations per frame, the factor's size. range(1): tolerance in um (0: the
-// relative 1e-8 rule); range(2): 1 linear tets, 2 quadratic.
+// relative 1e-8 rule); range(2): 1 linear tets, 2 quadratic; range(3): 0 Newton, 1 quasi-Newton (L-BFGS
+// on the rest stiffness's factor, issue 32; counter quasi_newton_per_frame).
 void BM_FemNeoHookeanGrabDirect(benchmark::State& state) {
   const int n = static_cast<int>(state.range(0));
   const double tol_mm = 1e-3 * static_cast<double>(state.range(1));
   const bool quadratic = state.range(2) == 2;
+  const bool quasi = state.range(3) == 1;
   const FemModel& lin = cube(n, FemLaw::neo_hookean);
   static std::map<int, std::unique_ptr<FemModel>> quadratic_models;
   auto& q = quadratic_models[n];
@@ -128,10 +130,12 @@ void BM_FemNeoHookeanGrabDirect(benchmark::State& state) {
   FemStaticOptions o;
   o.linear_solve = FemLinearSolve::direct;
   o.tolerance_mm = tol_mm;
+  if (quasi) o.nonlinear = FemNonlinearSolve::quasi_newton;
   FemStaticSolver solver(m, o);
   const FemStaticResult first = solver.solve(bc, {});
   std::vector<double> u = first.displacements;
-  int k = 0, frames = 0, newton = 0, factorizations = 0;
+  int k = 0, frames = 0, newton = 0, factorizations = 0, lbfgs = 0;
+  double solve_s = 0, assembly_s = 0;
   for (auto _ : state) {
     const double depth = 2.0 + 0.1 * (++k % 10);
     for (std::size_t g = 0; g < bc.prescribed_nodes.size(); ++g) bc.prescribed_displacements[3 * g + 2] = -depth;
@@ -139,8 +143,15 @@ void BM_FemNeoHookeanGrabDirect(benchmark::State& state) {
     u = r.displacements;
     ++frames;
     newton += r.report.newton_iterations;
+    lbfgs += r.report.quasi_newton_iterations;
     factorizations += r.report.factorizations;
+    solve_s += r.report.solve_seconds;
+    assembly_s += r.report.assembly_seconds;
   }
+  // Of a frame: the linear solves (factorisations, substitutions, the two-loop recursion) and the tangent's assembly, ms.
+  state.counters["solve_ms"] = 1e3 * solve_s / std::max(1, frames);
+  state.counters["assembly_ms"] = 1e3 * assembly_s / std::max(1, frames);
+  state.counters["quasi_newton_per_frame"] = static_cast<double>(lbfgs) / std::max(1, frames);
   state.counters["vertices"] = lin.node_count();
   state.counters["nodes"] = m.node_count();
   state.counters["setup_ms"] = 1e3 * first.report.seconds;
@@ -150,15 +161,19 @@ void BM_FemNeoHookeanGrabDirect(benchmark::State& state) {
   state.counters["factor_mb"] = static_cast<double>(first.report.factor_bytes) / 1048576.0;
 }
 BENCHMARK(BM_FemNeoHookeanGrabDirect)
-    ->ArgsProduct({{9, 12, 14, 16}, {0, 10}, {1}})
-    ->Args({9, 10, 2})
-    ->Args({16, 10, 2})
+    ->ArgsProduct({{9, 12, 14, 16}, {0, 10}, {1}, {0}})
+    ->ArgsProduct({{9, 12, 14, 16}, {10}, {1}, {1}})
+    ->Args({9, 10, 2, 0})
+    ->Args({16, 10, 2, 0})
+    ->Args({9, 10, 2, 1})
+    ->Args({16, 10, 2, 1})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 
-// Issue 16: one implicit (backward Euler) step of 1/60 s per iteration, the grab moving 0.1 mm a step
-// (as a live drag), at the Table 2 sizes; Neo-Hookean and corotational, tolerance 0.01 mm. Counters:
-// Newton iterations and factorisations per step.
+// Issue 16: one implicit step of 1/60 s per iteration, the grab moving 0.1 mm a step (as a live drag),
+// at the Table 2 sizes; Neo-Hookean and corotational, tolerance 0.01 mm. range(2): 0 Newton, 1
+// quasi-Newton; range(3): 0 backward Euler, 1 midpoint (issue 32). Counters: Newton (and L-BFGS)
+// iterations and factorisations per step.
 void BM_FemImplicitStep(benchmark::State& state) {
   const int n = static_cast<int>(state.range(0));
   const auto law = state.range(1) ? FemLaw::corotational : FemLaw::neo_hookean;
@@ -166,11 +181,13 @@ void BM_FemImplicitStep(benchmark::State& state) {
   FemBoundaryConditions bc = cube_grab(m, 0.0);
   FemImplicitOptions o;
   o.newton.tolerance_mm = 0.01;
+  if (state.range(2) == 1) o.newton.nonlinear = FemNonlinearSolve::quasi_newton;
+  if (state.range(3) == 1) o.scheme = FemImplicitScheme::midpoint;
   FemImplicitDynamics d(m, o);
   d.set_supports(bc.fixed_nodes);
   d.set_prescribed(bc.prescribed_nodes, bc.prescribed_displacements);
   d.step(1);  // the pattern, the analysis, the first factor
-  int k = 0, steps = 0, newton = 0, factorizations = 0;
+  int k = 0, steps = 0, newton = 0, factorizations = 0, lbfgs = 0;
   for (auto _ : state) {
     const double depth = 0.1 * (++k % 30);
     for (std::size_t g = 0; g < bc.prescribed_nodes.size(); ++g) bc.prescribed_displacements[3 * g + 2] = -depth;
@@ -178,13 +195,19 @@ void BM_FemImplicitStep(benchmark::State& state) {
     const FemImplicitStepReport r = d.step(1);
     ++steps;
     newton += r.newton_iterations;
+    lbfgs += r.quasi_newton_iterations;
     factorizations += r.factorizations;
   }
   state.counters["vertices"] = m.node_count();
   state.counters["newton_per_step"] = static_cast<double>(newton) / std::max(1, steps);
+  state.counters["quasi_newton_per_step"] = static_cast<double>(lbfgs) / std::max(1, steps);
   state.counters["factorizations_per_step"] = static_cast<double>(factorizations) / std::max(1, steps);
 }
-BENCHMARK(BM_FemImplicitStep)->ArgsProduct({{9, 12, 14, 16}, {0, 1}})->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_FemImplicitStep)
+    ->ArgsProduct({{9, 12, 14, 16}, {0, 1}, {0}, {0}})
+    ->ArgsProduct({{9, 12, 14, 16}, {0}, {1}, {0}})
+    ->Args({16, 0, 0, 1})
+    ->Unit(benchmark::kMillisecond)->UseRealTime();
 
 // Explicit steps: a box of about `tets` tets (n x n x 2n cells, 12 n^3 tets), the bottom fixed, gravity,
 // damping; a grab on top so that the body deforms.

@@ -31,11 +31,13 @@
 //
 // DIR holds the demo's heart inputs (grid.h5, surface_textured.h5, tetmesh.h5: build/demo/heart, made by
 // `make -f scripts/Makefile demo`, or by bench/run.sh live). Cases: grid (heart_grab.yaml: the implicit
-// spring grid), explicit (heart_explicit_grab.yaml), fem_static (heart_fem_grab.yaml: Neo-Hookean static),
+// spring grid), explicit (heart_explicit_grab.yaml), fem_static (heart_fem_grab.yaml: Neo-Hookean static,
+// Newton to the relative 1e-8), fem_static_mm (Newton to solver.tolerance_mm 0.05), fem_static_qn (quasi-Newton to
+// 0.05 mm: solver.nonlinear: quasi_newton, fem_static_solver.h),
 // fem_dynamic (heart_fem_cut.yaml: Neo-Hookean explicit dynamics), fem_linear (heart_fem_grab.yaml with
 // material.law: linear, the FEM-speed work's fastest model within 1 mm, docs/accuracy.md), fem_local
 // (heart_fem_local.yaml: Neo-Hookean in a 20 mm local region), live (heart_live.yaml: the scenario
-// ctsurg-live opens, linear static, a frame per 1/40 s). Prints one markdown row per case
+// ctsurg-live opens, Neo-Hookean static by quasi-Newton, a frame per 1/30 s). Prints one markdown row per case
 // (--markdown: with the table's header). Exit 2 for bad arguments or inputs, 1 when a case fails.
 #include "ctsurg/core/error.h"
 #include "ctsurg/sim/live/live_clock.h"
@@ -77,16 +79,22 @@ constexpr std::array<double, 3> kCutFrom{25, -234, 615}, kCutTo{25, -234, 655}, 
 struct Case {
   std::string name, label, scenario;
   std::string material_law;  // overrides material.law when not empty
+  std::string nonlinear;     // overrides solver.nonlinear when not empty
+  double tolerance_mm = 0;   // sets solver.tolerance_mm when > 0
 };
 
 const std::vector<Case> kCases = {
-    {"grid", "spring grid (heart_grab)", "heart_grab.yaml", ""},
-    {"explicit", "explicit springs (heart_explicit_grab)", "heart_explicit_grab.yaml", ""},
-    {"fem_static", "FEM Neo-Hookean static (heart_fem_grab)", "heart_fem_grab.yaml", ""},
-    {"fem_dynamic", "FEM Neo-Hookean dynamic (heart_fem_cut)", "heart_fem_cut.yaml", ""},
-    {"fem_linear", "FEM linear static (heart_fem_grab, material.law: linear)", "heart_fem_grab.yaml", "linear"},
-    {"fem_local", "FEM Neo-Hookean static, 20 mm local region (heart_fem_local)", "heart_fem_local.yaml", ""},
-    {"live", "FEM linear static, a frame per 1/40 s (heart_live: ctsurg-live's scenario)", "heart_live.yaml", ""},
+    {"grid", "spring grid (heart_grab)", "heart_grab.yaml", "", "", 0},
+    {"explicit", "explicit springs (heart_explicit_grab)", "heart_explicit_grab.yaml", "", "", 0},
+    {"fem_static", "FEM Neo-Hookean static, Newton (heart_fem_grab)", "heart_fem_grab.yaml", "", "", 0},
+    {"fem_static_mm", "FEM Neo-Hookean static, Newton to 0.05 mm (heart_fem_grab, solver.tolerance_mm: 0.05)", "heart_fem_grab.yaml", "", "",
+     0.05},
+    {"fem_static_qn", "FEM Neo-Hookean static, quasi-Newton to 0.05 mm (heart_fem_grab, solver: {nonlinear: quasi_newton, tolerance_mm: 0.05})",
+     "heart_fem_grab.yaml", "", "quasi_newton", 0.05},
+    {"fem_dynamic", "FEM Neo-Hookean dynamic (heart_fem_cut)", "heart_fem_cut.yaml", "", "", 0},
+    {"fem_linear", "FEM linear static (heart_fem_grab, material.law: linear)", "heart_fem_grab.yaml", "linear", "", 0},
+    {"fem_local", "FEM Neo-Hookean static, 20 mm local region (heart_fem_local)", "heart_fem_local.yaml", "", "", 0},
+    {"live", "FEM Neo-Hookean static, quasi-Newton to 0.05 mm, a frame per 1/30 s (heart_live: ctsurg-live's scenario)", "heart_live.yaml", "", "", 0},
 };
 
 // A timed client message.
@@ -156,6 +164,8 @@ std::string live_text(const fs::path& file, const Case& c, int threads, const st
   root.remove("tools");
   root.remove("render");
   if (!c.material_law.empty()) root["material"]["law"] = c.material_law;
+  if (!c.nonlinear.empty()) root["solver"]["nonlinear"] = c.nonlinear;
+  if (c.tolerance_mm > 0) root["solver"]["tolerance_mm"] = c.tolerance_mm;
   if (threads > 0) root["threads"] = threads;
   if (!backend.empty()) root["backend"] = backend;
   YAML::Emitter out;
@@ -318,7 +328,7 @@ std::string short_message(std::string m) {
 
 int main(int argc, char** argv) {
   fs::path heart, scenarios = fs::path(CTSURG_SOURCE_DIR) / "data_samples" / "scenarios";
-  std::string which = "grid,explicit,fem_static,fem_dynamic,fem_linear,fem_local,live";
+  std::string which = "grid,explicit,fem_static,fem_static_mm,fem_static_qn,fem_dynamic,fem_linear,fem_local,live";
   int threads = 0;
   std::string backend;
   bool markdown = false;
@@ -333,7 +343,7 @@ int main(int argc, char** argv) {
     else if (a == "--verbose") g_verbose = true;
     else {
       std::cerr << "usage: bench_live_session --heart DIR [--scenarios DIR] [--cases grid,explicit,fem_static,fem_dynamic,"
-                   "fem_linear,fem_local,live] [--threads N] [--backend cpu|cuda|auto] [--markdown] [--verbose]\n";
+                   "fem_static_mm,fem_static_qn,fem_linear,fem_local,live] [--threads N] [--backend cpu|cuda|auto] [--markdown] [--verbose]\n";
       return 2;
     }
   }

@@ -434,8 +434,8 @@ if want live; then
     echo "script (a grab's begin and each cut refactorise an FEM model: 30-300 ms); while dragging = from 0.5 s to 3 s (the"
     echo "steady drag, what the target is judged on); per-picture time = messages + advance + frame. Unpaced: the loop"
     echo "never sleeping, what the server could send. Bytes per frame: 56 + 12 V positions only, + 12 F with the triangles"
-    echo "(the first frame and after a cut changed them). Steps: the engine's over the paced run (a static model: one"
-    echo "equilibrium per frame). Target (issue 22): real-time factor >= 1 with"
+    echo "(the first frame and after a cut changed them). Steps: the engine's over the paced run (a static model: its"
+    echo "nonlinear iterations, Newton or quasi-Newton). Target (issue 22): real-time factor >= 1 with"
     echo ">= 30 pictures/s on 2 cores. Load average at the start: $(cut -d' ' -f1-3 /proc/loadavg) (a shared machine)."
     echo
     "$BIN/bench_live_session" --heart "$heart" --markdown --threads 1

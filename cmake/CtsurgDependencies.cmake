@@ -54,3 +54,6 @@ find_package(yaml-cpp REQUIRED)
 # header and library are found directly. Its supernodal factorisation runs on BLAS: install-deps.sh installs
 # OpenBLAS, which Debian's alternatives then select over the reference BLAS (10x faster factorisations).
 ctsurg_import_library(SuiteSparse::CHOLMOD CHOLMOD cholmod.h cholmod libsuitesparse-dev PATH_SUFFIXES suitesparse)
+# The same BLAS, linked directly for the single-precision substitutions (sgemv, strsv: the quasi-Newton
+# iteration's preconditioner, sparse_cholesky.h); libsuitesparse-dev depends on a libblas.so.
+find_package(BLAS REQUIRED)

@@ -12,8 +12,9 @@ packages=(
   libosmesa6-dev libcli11-dev libspdlog-dev nlohmann-json3-dev libyaml-cpp-dev libssl-dev zlib1g-dev
   # fuzzing: clang with libFuzzer and the sanitizer runtimes (tests/fuzz/README.md)
   clang libclang-rt-14-dev
-  # the FEM's sparse Cholesky (CHOLMOD) and the BLAS it runs on (OpenBLAS over Debian's reference BLAS)
-  libsuitesparse-dev libopenblas0-pthread
+  # the FEM's sparse Cholesky (CHOLMOD) and the BLAS it runs on (OpenBLAS over Debian's reference BLAS);
+  # libblas-dev's libblas.so links the quasi-Newton's single-precision substitutions (sparse_cholesky.h)
+  libsuitesparse-dev libopenblas0-pthread libblas-dev
   # tests and benchmarks; dcm2niix, python3-nibabel/vtk9 and tetgen are the peers we validate against
   libgtest-dev libgmock-dev libbenchmark-dev dcm2niix libgdcm-tools python3 python3-numpy python3-nibabel
   python3-vtk9 python3-h5py time tetgen

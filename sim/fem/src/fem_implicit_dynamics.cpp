@@ -97,28 +97,46 @@ bool FemImplicitDynamics::advance(double h, const std::vector<double>& start, do
       held[d] = 1;
       target[d] = fraction == 1 ? prescribed_[3 * g + a] : start[d] + fraction * (prescribed_[3 * g + a] - start[d]);
     }
-  // The inertia and damping terms (fem_newton.h): c_m (u - y) = (u - u_n - h v_n) / h^2 + alpha (u - u_n) / h.
+  // The inertia and damping terms (fem_newton.h). Backward Euler, for u = u_{n+1}: c_m (u - y) =
+  // (u - u_n - h v_n) / h^2 + alpha (u - u_n) / h. Midpoint, for u = w = (u_n + u_{n+1}) / 2: c_m (u - y) =
+  // 4 (u - u_n - h v_n / 2) / h^2 + 2 alpha (u - u_n) / h; the held components' w halfway to their targets.
   const double alpha = options_.mass_damping, beta = options_.stiffness_damping;
+  const bool midpoint = options_.scheme == FemImplicitScheme::midpoint;
+  const double ci = midpoint ? 4 / (h * h) : 1 / (h * h), cv = midpoint ? 0.5 * h : h, ca = midpoint ? 2 * alpha / h : alpha / h;
   FemNewtonTerms terms;
-  terms.mass = 1 / (h * h) + alpha / h;
+  terms.mass = ci + ca;
   terms.inertia_target.resize(n3);
-  for (std::size_t d = 0; d < n3; ++d) {
-    terms.inertia_target[d] = ((u_[d] + h * v_[d]) / (h * h) + alpha * u_[d] / h) / terms.mass;
-  }
-  terms.stiffness_damping = beta / h;
+  for (std::size_t d = 0; d < n3; ++d) terms.inertia_target[d] = (ci * (u_[d] + cv * v_[d]) + ca * u_[d]) / terms.mass;
+  terms.stiffness_damping = (midpoint ? 2 : 1) * beta / h;
   if (beta != 0) terms.damping_origin = u_;
+  if (midpoint) {
+    terms.gradient_origin = u_;  // the discrete gradient: the energy kept for every law (fem_newton.h)
+    for (std::size_t d = 0; d < n3; ++d)
+      if (held[d]) target[d] = 0.5 * (u_[d] + target[d]);
+  }
   FemNewton& newton = *newton_;
   newton.set_terms(std::move(terms));  // first: with inertia, no support is needed (set_held)
   newton.set_held(held, target);
   newton.set_external(external_);
   FemStaticReport rep;
-  rep.reference_residual = newton.reference_residual();
+  rep.reference_residual = newton.needs_reference() ? newton.reference_residual() : NAN;
   std::vector<double> u(n3);
-  for (std::size_t d = 0; d < n3; ++d) u[d] = held[d] ? u_[d] : u_[d] + h * v_[d];  // the predictor; held ones are lifted
+  for (std::size_t d = 0; d < n3; ++d) u[d] = held[d] ? u_[d] : u_[d] + cv * v_[d];  // the predictor; held ones are lifted
   const bool ok = newton.newton(u, 1.0, rep, failure);
   report.newton_iterations += rep.newton_iterations;
+  report.quasi_newton_iterations += rep.quasi_newton_iterations;
   report.factorizations += rep.factorizations;
   if (!ok) return false;
+  if (midpoint) {
+    // u_{n+1} = 2 w - u_n, v_{n+1} = 2 (u_{n+1} - u_n) / h - v_n = 4 (w - u_n) / h - v_n; a held component's velocity is its mean over
+    // the step (it does not enter the free components' equations).
+    for (std::size_t d = 0; d < n3; ++d) {
+      const double next = 2 * u[d] - u_[d];
+      v_[d] = held[d] ? (next - u_[d]) / h : 2 * (next - u_[d]) / h - v_[d];
+      u_[d] = next;
+    }
+    return true;
+  }
   for (std::size_t d = 0; d < n3; ++d) {
     v_[d] = (u[d] - u_[d]) / h;
     u_[d] = u[d];

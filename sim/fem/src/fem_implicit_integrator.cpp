@@ -17,6 +17,7 @@ class FemImplicitIntegrator final : public FemIntegrator {
     o.dt = options.dt > 0 ? options.dt : 1.0 / 60;
     o.mass_damping = options.mass_damping;
     o.stiffness_damping = options.stiffness_damping;
+    o.scheme = options.implicit_scheme;
     o.gravity = options.gravity;
     o.threads = options.threads;
     o.newton = options.newton;
@@ -40,7 +41,8 @@ class FemImplicitIntegrator final : public FemIntegrator {
     if (holds.update_forces(tools, u, false)) implicit_->set_external_forces(holds.nodal_forces());
     FemAdvance a;
     try {
-      a.newton_iterations = implicit_->step(steps).newton_iterations;
+      const FemImplicitStepReport r = implicit_->step(steps);
+      a.newton_iterations = r.newton_iterations + r.quasi_newton_iterations;  // the nonlinear iterations
     } catch (const RuntimeError& e) {
       a.stability.stable = false;
       a.stability.time = implicit_->time();

@@ -39,7 +39,20 @@ class EigenThreads {
   int before_;
 };
 
-std::string element_text(const FemModel& model, int32_t e) {
+// The largest of the last `count` values.
+double recent_max(const std::vector<double>& history, std::size_t count) {
+  double m = 0;
+  for (std::size_t k = history.size() > count ? history.size() - count : 0; k < history.size(); ++k) m = std::max(m, history[k]);
+  return m;
+}
+
+void check_node(int32_t id, int32_t n, const char* field) {
+  if (id < 0 || id >= n) throw InputError("fem static", field, "node id " + std::to_string(id) + " out of range [0, " + std::to_string(n) + ")");
+}
+
+}  // namespace
+
+std::string fem_element_text(const FemModel& model, int32_t e) {
   std::ostringstream s;
   s << "element " << e << " (rest centroid";
   double centroid[3] = {0, 0, 0};
@@ -50,12 +63,6 @@ std::string element_text(const FemModel& model, int32_t e) {
   s << ") mm)";
   return s.str();
 }
-
-void check_node(int32_t id, int32_t n, const char* field) {
-  if (id < 0 || id >= n) throw InputError("fem static", field, "node id " + std::to_string(id) + " out of range [0, " + std::to_string(n) + ")");
-}
-
-}  // namespace
 
 void validate_fem_static(const FemModel& model, const FemBoundaryConditions& bc, const FemLoads& loads, const FemStaticOptions& o) {
   const char* where = "fem static";
@@ -86,6 +93,9 @@ void validate_fem_static(const FemModel& model, const FemBoundaryConditions& bc,
   if (!(std::isfinite(o.tolerance_mm) && o.tolerance_mm >= 0)) throw InputError(where, "tolerance_mm", "must be finite and >= 0 (0: the relative tolerances)");
   if (o.direct_max_bytes < 0) throw InputError(where, "direct_max_bytes", "must be >= 0 (0: half the memory available)");
   if (o.reuse_cg_iterations < 0 || o.reuse_cg_iterations > 1000) throw InputError(where, "reuse_cg_iterations", "must be in [0, 1000]");
+  if (o.lbfgs_history < 1 || o.lbfgs_history > 50) throw InputError(where, "lbfgs_history", "must be in [1, 50]");
+  if (o.max_quasi_newton_iterations < 1 || o.max_quasi_newton_iterations > 100000)
+    throw InputError(where, "max_quasi_newton_iterations", "must be in [1, 100000]");
   if (!o.initial_displacements.empty() && o.initial_displacements.size() != 3 * static_cast<std::size_t>(n))
     throw InputError(where, "initial_displacements", "expected #N x 3 = " + std::to_string(3 * n) + " values or none");
   for (double d : o.initial_displacements)
@@ -125,13 +135,52 @@ void FemNewton::set_held(const std::vector<uint8_t>& held, const std::vector<dou
   build_system();
 }
 
-void FemNewton::set_external(const std::vector<double>& external) { external_ = external; }
+void FemNewton::set_external(const std::vector<double>& external) {
+  external_ = external;
+  last_s_ = NAN;
+}
 
 void FemNewton::set_terms(FemNewtonTerms terms) {
   // The tangent's coefficients change with the step length, and K_n with every step under stiffness damping.
   if (terms.mass != terms_.mass || terms.stiffness_damping != 0 || terms_.stiffness_damping != 0) factor_current_ = false;
+  if (terms.mass != rest_mass_ || terms.stiffness_damping != rest_damping_) rest_factor_ = false;
   terms_ = std::move(terms);
   damping_ready_ = false;
+  last_s_ = NAN;
+  if (!terms_.gradient_origin.empty()) {
+    origin_energy_.resize(static_cast<std::size_t>(m_.tet_count()));
+    cpu::fem_strain_energy(el_, terms_.gradient_origin.data(), origin_energy_.data(), threads_);
+  }
+}
+
+// forces_ (the internal forces at w) with each element's discrete-gradient correction (fem_newton.h);
+// serial in element order: deterministic. end_energy_ is +inf for an element inverted at u_1 = 2 w - u_0.
+void FemNewton::discrete_gradient(const std::vector<double>& w) {
+  const std::vector<double>& u0 = terms_.gradient_origin;
+  end_u_.resize(w.size());
+  for (std::size_t d = 0; d < w.size(); ++d) end_u_[d] = 2 * w[d] - u0[d];
+  end_energy_.resize(static_cast<std::size_t>(m_.tet_count()));
+  cpu::fem_strain_energy(el_, end_u_.data(), end_energy_.data(), threads_);
+  gradient_coefficient_.assign(static_cast<std::size_t>(m_.tet_count()), 0.0);
+  for (int32_t e = 0; e < m_.tet_count(); ++e) {
+    const int32_t* v = &m_.tets[static_cast<std::size_t>(npe_) * e];
+    const double* f = &corner_[static_cast<std::size_t>(ne_) * e];
+    double delta[30], dd = 0, fd = 0;
+    for (int c = 0; c < ne_; ++c) {
+      const std::size_t d = 3 * static_cast<std::size_t>(v[c / 3]) + c % 3;
+      delta[c] = end_u_[d] - u0[d];
+      dd += delta[c] * delta[c];
+      fd += f[c] * delta[c];
+    }
+    if (!(dd > 1e-300) || !std::isfinite(end_energy_[e])) continue;
+    // The numerator is third order in D: below the round-off of its terms it is noise, which |D|^2 would
+    // amplify (an element that hardly moves), and the correction is left out.
+    const double numerator = end_energy_[e] - origin_energy_[e] + fd;
+    if (std::abs(numerator) <= 1e-12 * (std::abs(end_energy_[e]) + std::abs(origin_energy_[e]) + std::abs(fd))) continue;
+    const double coefficient = numerator / dd;
+    gradient_coefficient_[static_cast<std::size_t>(e)] = coefficient;
+    for (int c = 0; c < ne_; ++c) forces_[3 * static_cast<std::size_t>(v[c / 3]) + c % 3] -= coefficient * delta[c];
+  }
 }
 
 void FemNewton::build_system() {
@@ -197,6 +246,7 @@ void FemNewton::build_system() {
   for (int32_t row = 0; row < free_count; ++row) diagonal_[row] = std::lower_bound(ip + op[row], ip + op[row + 1], row) - ip;
   // The linear solves: direct while the factor fits (after its analysis: the ordering says how big).
   factor_current_ = false;
+  rest_factor_ = false;
   direct_ = false;
   cholesky_.reset();
   if (o_.linear_solve != FemLinearSolve::iterative && free_count > 0 &&
@@ -226,6 +276,12 @@ std::string FemNewton::node_of_column(int64_t column) const {
 int32_t FemNewton::forces(const std::vector<double>& u, double s, std::vector<double>& out) {
   const int32_t inverted = cpu::fem_forces(el_, m_.node_offsets.data(), m_.node_corners.data(), m_.node_count(), u.data(),
                                            corner_.data(), forces_.data(), threads_);
+  int32_t inverted_end = -1;
+  if (!terms_.gradient_origin.empty() && inverted < 0) {
+    discrete_gradient(u);
+    for (int32_t e = 0; e < m_.tet_count() && inverted_end < 0; ++e)  // an element inverted at the step's end
+      if (!std::isfinite(end_energy_[static_cast<std::size_t>(e)])) inverted_end = e;
+  }
   out.resize(u.size());
   for (std::size_t d = 0; d < u.size(); ++d) out[d] = forces_[d] + s * external_[d];
   if (terms_.mass != 0) {
@@ -235,7 +291,7 @@ int32_t FemNewton::forces(const std::vector<double>& u, double s, std::vector<do
     damping_product(u, damping_kw_);
     for (std::size_t d = 0; d < u.size(); ++d) out[d] -= terms_.stiffness_damping * damping_kw_[d];
   }
-  return inverted;
+  return inverted >= 0 ? inverted : inverted_end;
 }
 
 // K_n (u - u_n) from the kept element matrices (serial, in element order: deterministic).
@@ -277,9 +333,21 @@ double FemNewton::energy(const std::vector<double>& u, double s) {
 // r on the free components; returns the lowest inverted element or -1.
 int32_t FemNewton::residual(const std::vector<double>& u, double s, Eigen::VectorXd& r) {
   const int32_t inverted = forces(u, s, all_forces_);
+  last_u_ = u;
+  last_s_ = inverted < 0 ? s : NAN;
   r.resize(static_cast<Eigen::Index>(free_component_.size()));
   for (std::size_t k = 0; k < free_component_.size(); ++k) r[static_cast<Eigen::Index>(k)] = all_forces_[free_component_[k]];
   return inverted;
+}
+
+bool FemNewton::needs_reference() const {
+  return !(o_.nonlinear == FemNonlinearSolve::quasi_newton && direct_ && o_.tolerance_mm > 0 && !free_component_.empty() && has_potential());
+}
+
+bool FemNewton::last_forces(const std::vector<double>& u, double s, std::vector<double>& out) const {
+  if (!(s == last_s_) || u != last_u_ || all_forces_.size() != u.size()) return false;
+  out = all_forces_;
+  return true;
 }
 
 double FemNewton::reference_residual() {
@@ -296,12 +364,34 @@ void FemNewton::damping_tangent() {
   kbuf_n_.resize(kbuf_.size());
   cpu::fem_stiffness(el_, terms_.damping_origin.data(), kbuf_n_.data(), threads_, o_.projection != FemTangentProjection::never);
   damping_ready_ = true;
+  last_s_ = NAN;  // forces() has the damping term from now on
 }
 
 int32_t FemNewton::assemble(const std::vector<double>& u, bool project) {
   if (terms_.stiffness_damping != 0 && !damping_ready_) damping_tangent();
   assembled_at_ = &u;
   const int32_t inverted = cpu::fem_stiffness(el_, u.data(), kbuf_.data(), threads_, project);
+  if (!terms_.gradient_origin.empty() && gradient_coefficient_.size() == static_cast<std::size_t>(m_.tet_count())) {
+    // The discrete gradient's leading-order tangent, from the last forces() (at this u): d(c_e D_e)/dw =
+    // 2 c_e (I - 2 D^ D^T) (D^ = D_e / |D_e|; the derivative of the numerator is of higher order), its
+    // positive part kept (the factor needs a definite tangent): 2 c_e (I - D^ D^T) for c_e > 0, -2 c_e D^ D^T
+    // for c_e < 0.
+    for (int32_t e = 0; e < m_.tet_count(); ++e) {
+      const double c = gradient_coefficient_[static_cast<std::size_t>(e)];
+      if (c == 0) continue;
+      const int32_t* v = &m_.tets[static_cast<std::size_t>(npe_) * e];
+      double delta[30], dd = 0;
+      for (int k = 0; k < ne_; ++k) {
+        const std::size_t d = 3 * static_cast<std::size_t>(v[k / 3]) + k % 3;
+        delta[k] = end_u_[d] - terms_.gradient_origin[d];
+        dd += delta[k] * delta[k];
+      }
+      double* k = &kbuf_[static_cast<std::size_t>(ne_ * ne_) * e];
+      for (int a = 0; a < ne_; ++a)
+        for (int b = 0; b < ne_; ++b)
+          k[ne_ * a + b] += c > 0 ? 2 * c * ((a == b ? 1.0 : 0.0) - delta[a] * delta[b] / dd) : -2 * c * delta[a] * delta[b] / dd;
+    }
+  }
   double* values = k_.valuePtr();
   const int64_t nnz = k_.nonZeros();
   const int64_t* off = contrib_offsets_.data();
@@ -388,6 +478,7 @@ int FemNewton::solve_direct(const Eigen::VectorXd& b, Eigen::VectorXd& du, doubl
   }
   if (!factor_current_) {
     int64_t failed = cholesky_->factorize(k_.valuePtr());
+    rest_factor_ = false;
     ++rep.factorizations;
     rep.factor_bytes = cholesky_->factor_bytes();
     if (failed >= 0 && !projecting_ && o_.projection == FemTangentProjection::when_needed &&
@@ -427,9 +518,9 @@ bool FemNewton::held_gap(const std::vector<double>& u, double s, std::vector<dou
 // b = r - J_fh gap on the free components, J_fh from the element matrices of the last assembly (and
 // the damping tangent); serial, in element order: deterministic. Only elements with a moving held
 // corner contribute.
-void FemNewton::lift(const std::vector<double>& gap, Eigen::VectorXd& b) const {
+void FemNewton::lift(const std::vector<double>& gap, Eigen::VectorXd& b, const std::vector<double>& kbuf, double scale,
+                     const std::vector<double>* kbuf_n, double cb) const {
   const int32_t t = m_.tet_count();
-  const double cb = terms_.stiffness_damping;
   for (int32_t e = 0; e < t; ++e) {
     const int32_t* v = &m_.tets[static_cast<std::size_t>(npe_) * e];
     double g[30];
@@ -440,16 +531,45 @@ void FemNewton::lift(const std::vector<double>& gap, Eigen::VectorXd& b) const {
     }
     if (!moving) continue;
     const std::size_t ne2 = static_cast<std::size_t>(ne_ * ne_);
-    const double* k = &kbuf_[ne2 * e];
-    const double* kn = cb != 0 ? &kbuf_n_[ne2 * e] : nullptr;
+    const double* k = &kbuf[ne2 * e];
+    const double* kn = kbuf_n != nullptr ? &(*kbuf_n)[ne2 * e] : nullptr;
     for (int r = 0; r < ne_; ++r) {
       const int32_t row = free_index_[3 * v[r / 3] + r % 3];
       if (row < 0) continue;
       double kg = 0;
-      for (int c = 0; c < ne_; ++c) kg += (kn ? k[ne_ * r + c] + cb * kn[ne_ * r + c] : k[ne_ * r + c]) * g[c];
+      for (int c = 0; c < ne_; ++c) kg += (kn ? scale * k[ne_ * r + c] + cb * kn[ne_ * r + c] : scale * k[ne_ * r + c]) * g[c];
       b[row] -= kg;
     }
   }
+}
+
+FemNewton::LineSearch FemNewton::line_search(const std::vector<double>& u, const Eigen::VectorXd& du, const std::vector<double>& gap,
+                                             bool lifting, double s, double bar, double slope, bool accept_any, bool accept_full,
+                                             std::vector<double>& trial, Eigen::VectorXd& r_trial) {
+  LineSearch ls;
+  double e0 = NAN;
+  for (int k = 0; k <= o_.max_line_search; ++k, ls.alpha *= 0.5) {
+    trial = u;
+    for (std::size_t c = 0; c < free_component_.size(); ++c) trial[free_component_[c]] += ls.alpha * du[static_cast<Eigen::Index>(c)];
+    if (lifting) {
+      for (std::size_t d = 0; d < u.size(); ++d)
+        if (held_[d]) trial[d] = ls.alpha == 1 ? s * target_[d] : u[d] + ls.alpha * gap[d];  // exact at alpha = 1
+    }
+    ls.inverted = residual(trial, s, r_trial);
+    if (ls.inverted >= 0) continue;
+    if (lifting || r_trial.norm() < bar || accept_any || (accept_full && ls.alpha == 1)) {
+      ls.accepted = true;
+      return ls;
+    }
+    if (slope > 0 && has_potential()) {  // a descent direction of the potential: Armijo's sufficient decrease
+      if (std::isnan(e0)) e0 = energy(u, s);
+      if (energy(trial, s) <= e0 - 1e-4 * ls.alpha * slope) {
+        ls.accepted = true;
+        return ls;
+      }
+    }
+  }
+  return ls;
 }
 
 // Newton at load factor s from u, whose held components may still sit at an earlier factor's values.
@@ -460,16 +580,36 @@ void FemNewton::lift(const std::vector<double>& gap, Eigen::VectorXd& b) const {
 // residual test: the residual at the old held values is not comparable). Then plain Newton iterations
 // with the backtracking line search on ||r||.
 bool FemNewton::newton(std::vector<double>& u, double s, FemStaticReport& rep, std::string& failure) {
+  // The stiffness damping's K_n before the first residual, so that every residual has its term.
+  if (terms_.stiffness_damping != 0 && !damping_ready_) damping_tangent();
+  // Quasi-Newton's line search needs the potential: with a discrete gradient (the midpoint scheme) Newton.
+  if (o_.nonlinear == FemNonlinearSolve::quasi_newton && direct_ && !free_component_.empty() && has_potential()) {
+    if (quasi_newton(u, s, rep, failure)) return true;
+    ++rep.quasi_newton_fallbacks;
+  }
+  // Left out for quasi-Newton with the millimetre rule (needs_reference): Newton's forcing term needs it.
+  if (std::isnan(rep.reference_residual)) rep.reference_residual = reference_residual();
+  return newton_iterations(u, s, rep, failure);
+}
+
+bool FemNewton::first_residual(const std::vector<double>& u, double s, Eigen::VectorXd& r, double& rnorm, FemStaticReport& rep,
+                               std::string& failure) {
+  const int32_t inverted = residual(u, s, r);
+  if (inverted >= 0) {
+    failure = fem_element_text(m_, inverted) + " inverted at load factor " + std::to_string(s);
+    return false;
+  }
+  rnorm = r.norm();
+  rep.residual_history.push_back(rnorm);
+  return true;
+}
+
+bool FemNewton::newton_iterations(std::vector<double>& u, double s, FemStaticReport& rep, std::string& failure) {
   const EigenThreads eigen_threads(o_.threads > 0 ? o_.threads : (k_.nonZeros() > 1000000 ? threads_ : 1));
   projecting_ = o_.projection == FemTangentProjection::always;
   Eigen::VectorXd r, du, r_trial, b;
-  const int32_t inv0 = residual(u, s, r);
-  if (inv0 >= 0) {
-    failure = element_text(m_, inv0) + " inverted at load factor " + std::to_string(s);
-    return false;
-  }
-  double rnorm = r.norm();
-  rep.residual_history.push_back(rnorm);
+  double rnorm = 0;
+  if (!first_residual(u, s, r, rnorm, rep, failure)) return false;
   const bool linear = m_.every_law(FemLaw::linear);
   const bool in_mm = o_.tolerance_mm > 0;
   std::vector<double> trial(u.size()), gap(u.size());
@@ -484,7 +624,7 @@ bool FemNewton::newton(std::vector<double>& u, double s, FemStaticReport& rep, s
     const int32_t inv = assemble(u, projecting_);
     rep.assembly_seconds += seconds_since(t0);
     if (inv >= 0) {
-      failure = element_text(m_, inv) + " inverted at load factor " + std::to_string(s);
+      failure = fem_element_text(m_, inv) + " inverted at load factor " + std::to_string(s);
       return false;
     }
     // No step is skipped on the millimetre rule's residual alone: a soft (bending) mode's residual is far
@@ -492,7 +632,7 @@ bool FemNewton::newton(std::vector<double>& u, double s, FemStaticReport& rep, s
     // deflection), and at a dynamics step's predictor the inertia residual is zero. Only the relative
     // rule accepts the starting point (a warm start that is already the equilibrium).
     b = r;
-    if (lifting) lift(gap, b);
+    if (lifting) lift(gap, b, kbuf_, 1.0, terms_.stiffness_damping != 0 ? &kbuf_n_ : nullptr, terms_.stiffness_damping);
     t0 = Clock::now();
     // Inexact Newton (nonlinear laws): far from equilibrium the step needs no 1e-10 solve; the forcing
     // term follows the residual down, so the last steps are solved as tightly as before.
@@ -511,36 +651,18 @@ bool FemNewton::newton(std::vector<double>& u, double s, FemStaticReport& rep, s
     // longest step that inverts nothing. The residual alone rejects good steps of hyperelastic
     // problems: a cantilever's full Newton step leaves a large axial residual from the rotation it
     // makes, and ||r|| crept down in 15 steps of alpha = 1/8 where the energy takes the full step.
-    double alpha = 1;
-    bool accepted = false;
-    int32_t inverted = -1;
-    double e0 = NAN;
-    double slope = 0;  // -dE/dalpha at 0 = r . du on the free components
-    if (!lifting) slope = r.dot(du);
-    for (int ls = 0; ls <= o_.max_line_search; ++ls, alpha *= 0.5) {
-      trial = u;
-      for (std::size_t k = 0; k < free_component_.size(); ++k) trial[free_component_[k]] += alpha * du[static_cast<Eigen::Index>(k)];
-      if (lifting) {
-        for (std::size_t d = 0; d < u.size(); ++d)
-          if (held_[d]) trial[d] = alpha == 1 ? s * target_[d] : u[d] + alpha * gap[d];  // exact at alpha = 1
-      }
-      inverted = residual(trial, s, r_trial);
-      if (inverted >= 0) continue;
-      // A full step within the budget is taken whatever the residual does (at equilibrium, round-off decides).
-      if (lifting || r_trial.norm() < rnorm || linear || (in_mm && alpha == 1 && du.lpNorm<Eigen::Infinity>() <= o_.tolerance_mm)) {
-        accepted = true;
-        break;
-      }
-      if (slope > 0) {  // a descent direction of the potential: Armijo's sufficient decrease
-        if (std::isnan(e0)) e0 = energy(u, s);
-        if (energy(trial, s) <= e0 - 1e-4 * alpha * slope) {
-          accepted = true;
-          break;
-        }
-      }
-    }
+    const double slope = lifting ? 0.0 : r.dot(du);  // -dE/dalpha at 0 = r . du on the free components
+    // A full step within the budget is taken whatever the residual does (at equilibrium, round-off
+    // decides). Without a potential (a discrete gradient: the tangent is approximate), a non-monotone
+    // rule: below the largest of the last three residuals (Grippo, Lampariello and Lucidi 1986).
+    const double bar = has_potential() ? rnorm : std::max(rnorm, recent_max(rep.residual_history, 3));
+    const LineSearch ls = line_search(u, du, gap, lifting, s, bar, slope, linear, in_mm && du.lpNorm<Eigen::Infinity>() <= o_.tolerance_mm,
+                                      trial, r_trial);
+    const double alpha = ls.alpha;
+    const bool accepted = ls.accepted;
+    const int32_t inverted = ls.inverted;
     if (!accepted) {
-      failure = inverted >= 0 ? element_text(m_, inverted) + " inverted in every line-search trial at load factor " + std::to_string(s)
+      failure = inverted >= 0 ? fem_element_text(m_, inverted) + " inverted in every line-search trial at load factor " + std::to_string(s)
                               : "the line search found no decrease of the residual at load factor " + std::to_string(s);
       return false;
     }

@@ -9,6 +9,10 @@
 // semi-definite (options.projection: always, or when the exact J has no Cholesky factor), so J is
 // positive definite whenever the held components remove every rigid motion, and its factor exists.
 //
+// Or quasi-Newton (options.nonlinear, src/fem_quasi_newton.cpp): L-BFGS on the same residual and
+// potential, its initial inverse Hessian the factor of J_0 = K(0) + c_m M + c_b K(0), made once per held
+// set and step coefficients.
+//
 // Linear solves. Direct: CHOLMOD (sparse_cholesky.h), the symbolic analysis once per held set, the
 // numeric factor kept across Newton iterations and solves: while the tangent has moved since the
 // factor was made, the factor preconditions conjugate gradients on the current tangent (a few
@@ -40,6 +44,14 @@ struct FemNewtonTerms {
   std::vector<double> inertia_target;  // y, #N x 3 mm (empty when mass = 0)
   double stiffness_damping = 0;      // c_b (dimensionless): -c_b K_n (u - u_n), tangent + c_b K_n
   std::vector<double> damping_origin;  // u_n, #N x 3 mm: K_n is the tangent there (empty when c_b = 0)
+  // u_0, #N x 3 mm, or empty. Given: the unknown is a midpoint w, and each element's internal force at w
+  // is replaced by its discrete gradient between u_0 and u_1 = 2 w - u_0 (Gonzalez 1996, "Time
+  // integration and discrete Hamiltonian systems"; per element: Betsch and Steinmann 2001):
+  //   f_e <- f_e(w) - c_e D_e,  c_e = (E_e(u_1) - E_e(u_0) + f_e(w) . D_e) / |D_e|^2,  D_e = u_1 - u_0 on e,
+  // so that f . (u_1 - u_0) = -(E(u_1) - E(u_0)) exactly: the midpoint rule then conserves the energy
+  // for every law (without it only for the linear one). The tangent ignores the correction (third
+  // order in D); the residual then has no potential, so the line searches judge ||r|| alone.
+  std::vector<double> gradient_origin;
 };
 
 class FemNewton {
@@ -66,13 +78,23 @@ class FemNewton {
   // ||r|| at the held targets (free components at 0) under the full load: the scale of the relative
   // tolerances. Call after set_held, set_external and set_terms.
   double reference_residual();
+  // Whether the solves read the reference residual: not quasi-Newton with the millimetre rule (its
+  // callers then leave rep.reference_residual NaN, and newton() computes it if it goes on with Newton).
+  bool needs_reference() const;
+  // The forces (as forces()) of the last residual evaluated, when it was at exactly this u and s (the
+  // solution a solve ended on: no second evaluation for the reactions); false otherwise.
+  bool last_forces(const std::vector<double>& u, double s, std::vector<double>& out) const;
   // Newton at load factor s from u, whose held components may still sit at an earlier factor's
   // values (then the first iterations are a lifted predictor). True when converged; `failure` says
   // why not. Adds to rep's counters and histories.
+  // With options.nonlinear quasi_newton (and a direct solve), L-BFGS first, then Newton from where it
+  // stopped if it did not converge.
   bool newton(std::vector<double>& u, double s, FemStaticReport& rep, std::string& failure);
   // f_int + s f_ext (+ the dynamic terms) on every component (#N x 3 uN), at u. Returns the lowest
   // inverted element or -1.
   int32_t forces(const std::vector<double>& u, double s, std::vector<double>& out);
+  // Whether forces() is the negative gradient of energy() (not with a discrete gradient).
+  bool has_potential() const { return terms_.gradient_origin.empty(); }
   // The potential whose negative gradient is forces(): strain energy - s f_ext . u + the terms'
   // (c_m/2 |u - y|_M^2 + c_b/2 |u - u_n|_{K_n}^2), nJ; +inf where an element is inverted.
   double energy(const std::vector<double>& u, double s);
@@ -90,7 +112,27 @@ class FemNewton {
   int solve_iterative(const Eigen::VectorXd& b, Eigen::VectorXd& du, double tolerance);
   int solve_direct(const Eigen::VectorXd& b, Eigen::VectorXd& du, double tolerance, FemStaticReport& rep);
   bool held_gap(const std::vector<double>& u, double s, std::vector<double>& gap) const;
-  void lift(const std::vector<double>& gap, Eigen::VectorXd& b) const;
+  // b -= J_fh gap from element matrices k (+ cb kn when kn is given).
+  void lift(const std::vector<double>& gap, Eigen::VectorXd& b, const std::vector<double>& k, double scale,
+            const std::vector<double>* kn, double cb) const;
+  bool newton_iterations(std::vector<double>& u, double s, FemStaticReport& rep, std::string& failure);
+  // The residual where an iteration starts (r, its norm, recorded in rep); false, with `failure`, when u
+  // inverts an element.
+  bool first_residual(const std::vector<double>& u, double s, Eigen::VectorXd& r, double& rnorm, FemStaticReport& rep, std::string& failure);
+  // The backtracking line search of both iterations: u + alpha du (alpha = 1, 1/2, ...; while lifting the
+  // held components move alpha of their gap, exactly to their targets at alpha = 1) until the trial
+  // inverts nothing and: lifts, or ||r|| < bar, or accept_any, or alpha = 1 and accept_full, or (with a
+  // potential and slope > 0) Armijo's decrease. trial and r_trial hold the accepted trial.
+  struct LineSearch {
+    double alpha = 1;
+    bool accepted = false;
+    int32_t inverted = -1;  // the last trial's lowest inverted element, or -1
+  };
+  LineSearch line_search(const std::vector<double>& u, const Eigen::VectorXd& du, const std::vector<double>& gap, bool lifting, double s,
+                         double bar, double slope, bool accept_any, bool accept_full, std::vector<double>& trial, Eigen::VectorXd& r_trial);
+  // fem_quasi_newton.cpp: L-BFGS at load factor s (true when converged; u stays a valid state either way).
+  bool quasi_newton(std::vector<double>& u, double s, FemStaticReport& rep, std::string& failure);
+  void factor_rest();  // J_0 into k_ and its factor (quasi-Newton's initial inverse Hessian)
   void build_system();
   void damping_tangent();
   std::string node_of_column(int64_t column) const;
@@ -119,7 +161,20 @@ class FemNewton {
   bool damping_ready_ = false;  // kbuf_n_ holds K_n
   bool projecting_ = false;     // this Newton solve assembles projected tangents (the exact one had no factor)
   const std::vector<double>* assembled_at_ = nullptr;  // the u of the last assembly (for a projected re-assembly)
+  // Quasi-Newton: the rest element tangents K(0) (computed once), whether the factor is of J_0 for the
+  // current held set, and the coefficients it was made with.
+  std::vector<double> rest_kbuf_;
+  std::vector<double> last_u_;  // the u of the last residual() (its forces are all_forces_)
+  double last_s_ = NAN;
+  // The discrete gradient (FemNewtonTerms::gradient_origin): element energies at u_0 and scratch.
+  std::vector<double> origin_energy_, end_energy_, end_u_, gradient_coefficient_;
+  void discrete_gradient(const std::vector<double>& w);
+  bool rest_factor_ = false;
+  double rest_mass_ = 0, rest_damping_ = 0;
 };
+
+// "element e (rest centroid (x, y, z) mm)" in LPS, for messages.
+std::string fem_element_text(const FemModel& model, int32_t e);
 
 // Checks a static problem's arguments (InputError("fem static", field, ...)).
 void validate_fem_static(const FemModel& model, const FemBoundaryConditions& bc, const FemLoads& loads,

@@ -108,7 +108,7 @@ class FemStaticIntegrator final : public FemIntegrator {
     u = std::move(r.displacements);
     time_ = time;
     FemAdvance a;
-    a.newton_iterations = r.report.newton_iterations;
+    a.newton_iterations = r.report.newton_iterations + r.report.quasi_newton_iterations;  // the nonlinear iterations
     a.cg_iterations = std::accumulate(r.report.cg_iterations.begin(), r.report.cg_iterations.end(), 0);
     return a;
   }

@@ -8,6 +8,7 @@
 #include <Eigen/Core>
 
 #include <algorithm>
+#include <cmath>
 #include <chrono>
 #include <sstream>
 #include <string>
@@ -62,7 +63,7 @@ FemStaticResult FemStaticSolver::solve(const FemBoundaryConditions& bc, const Fe
 
   FemStaticResult result;
   FemStaticReport& rep = result.report;
-  rep.reference_residual = newton.reference_residual();
+  rep.reference_residual = newton.needs_reference() ? newton.reference_residual() : NAN;
   rep.free_components = newton.free_components();
   std::vector<double> u(n3, 0.0), trial;
   double factor = 0, increment = 1.0 / options_.load_steps;
@@ -100,11 +101,11 @@ FemStaticResult FemStaticSolver::solve(const FemBoundaryConditions& bc, const Fe
     }
   }
   std::vector<double> f;
-  newton.forces(u, 1.0, f);
+  if (!newton.last_forces(u, 1.0, f)) newton.forces(u, 1.0, f);
   double r2 = 0;
   for (std::size_t d = 0; d < n3; ++d)
     if (!newton.held()[d]) r2 += f[d] * f[d];
-  rep.relative_residual = rep.reference_residual > 0 ? std::sqrt(r2) / rep.reference_residual : 0;
+  rep.relative_residual = std::isnan(rep.reference_residual) ? NAN : rep.reference_residual > 0 ? std::sqrt(r2) / rep.reference_residual : 0;
   rep.converged = true;
   rep.direct = newton.direct();
   rep.factor_bytes = newton.factor_bytes();

@@ -11,6 +11,15 @@
 #include <cstring>
 #include <vector>
 
+// The BLAS's single-precision matrix-vector product and triangular solve (Fortran interface: every
+// BLAS has it; the same library CHOLMOD's double-precision substitutions run on).
+extern "C" {
+void sgemv_(const char* trans, const int* m, const int* n, const float* alpha, const float* a, const int* lda, const float* x,
+            const int* incx, const float* beta, float* y, const int* incy);
+void strsv_(const char* uplo, const char* trans, const char* diag, const int* n, const float* a, const int* lda, float* x,
+            const int* incx);
+}
+
 namespace ctsurg::sim {
 namespace {
 
@@ -40,6 +49,8 @@ struct SparseCholesky::Impl {
   std::vector<int32_t> outer, inner;
   int32_t n = 0;
   bool numeric = false;
+  std::vector<float> single;       // make_single(): the factor's blocks in float (empty: none)
+  mutable std::vector<float> work, gathered;
   double analyze_s = 0, factor_s = 0;
 
   explicit Impl(std::string w) : where(std::move(w)) {
@@ -90,6 +101,7 @@ void SparseCholesky::analyze(int32_t n, const int32_t* outer, const int32_t* inn
   const auto t0 = Clock::now();
   if (s.factor != nullptr) cholmod_free_factor(&s.factor, &s.common);
   s.numeric = false;
+  s.single.clear();
   s.n = n;
   s.outer.assign(outer, outer + n + 1);
   s.inner.assign(inner, inner + outer[n]);
@@ -123,6 +135,7 @@ int64_t SparseCholesky::factorize(const double* values) {
                    "the sparse Cholesky factor of " + std::to_string(s.n) + " unknowns (" +
                        std::to_string(factor_nonzeros()) + " non-zeros)");
   cholmod_sparse a = s.view(values);
+  s.single.clear();
   const int ok = cholmod_factorize(&a, s.factor, &s.common);
   s.factor_s = seconds_since(t0);
   if (s.common.status == CHOLMOD_NOT_POSDEF) {
@@ -156,6 +169,64 @@ void SparseCholesky::solve(const double* b, double* x, int32_t k) const {
   }
   std::memcpy(x, sol->x, sizeof(double) * rhs.nzmax);
   cholmod_free_dense(&sol, &s.common);
+}
+
+void SparseCholesky::make_single() {
+  Impl& s = *impl_;
+  if (!s.numeric || !s.factor->is_super) throw RuntimeError(s.where + ": make_single() needs a supernodal factor");
+  const auto* x = static_cast<const double*>(s.factor->x);
+  s.single.assign(x, x + s.factor->xsize);
+}
+
+bool SparseCholesky::has_single() const { return !impl_->single.empty(); }
+
+// L L^T = P A P^T, L in supernodes: supernode k holds columns super[k] .. super[k+1] - 1, its rows
+// s[pi[k] .. pi[k+1]) (the first ones its own columns), its values a column-major block at px[k] with
+// the row count as leading dimension (CHOLMOD's cholmod_factor). x = P^T L^-T L^-1 P b, supernode by
+// supernode as CHOLMOD's own solve: the diagonal block by strsv, the rows below by sgemv, in float.
+void SparseCholesky::solve_single(const double* b, double* x) const {
+  const Impl& s = *impl_;
+  if (s.single.empty()) throw RuntimeError(s.where + ": solve_single() without make_single()");
+  const cholmod_factor& f = *s.factor;
+  const auto* super = static_cast<const int32_t*>(f.super);
+  const auto* pi = static_cast<const int32_t*>(f.pi);
+  const auto* px = static_cast<const int32_t*>(f.px);
+  const auto* rows = static_cast<const int32_t*>(f.s);
+  const auto* perm = static_cast<const int32_t*>(f.Perm);
+  const float* lx = s.single.data();
+  const auto nsuper = static_cast<int32_t>(f.nsuper);
+  std::vector<float>& y = s.work;
+  std::vector<float>& t = s.gathered;
+  y.resize(static_cast<size_t>(s.n));
+  for (int32_t i = 0; i < s.n; ++i) y[static_cast<size_t>(i)] = static_cast<float>(b[perm[i]]);
+  const int one = 1;
+  const float fone = 1, fzero = 0, fminus = -1;
+  // Forward: L y = P b.
+  for (int32_t k = 0; k < nsuper; ++k) {
+    const int k1 = super[k], ncols = super[k + 1] - k1, nrows = pi[k + 1] - pi[k], below = nrows - ncols;
+    const float* block = lx + px[k];
+    float* yk = y.data() + k1;
+    strsv_("L", "N", "N", &ncols, block, &nrows, yk, &one);
+    if (below == 0) continue;
+    t.resize(static_cast<size_t>(below));
+    sgemv_("N", &below, &ncols, &fone, block + ncols, &nrows, yk, &one, &fzero, t.data(), &one);
+    const int32_t* r = rows + pi[k] + ncols;
+    for (int i = 0; i < below; ++i) y[static_cast<size_t>(r[i])] -= t[static_cast<size_t>(i)];
+  }
+  // Backward: L^T z = y.
+  for (int32_t k = nsuper - 1; k >= 0; --k) {
+    const int k1 = super[k], ncols = super[k + 1] - k1, nrows = pi[k + 1] - pi[k], below = nrows - ncols;
+    const float* block = lx + px[k];
+    float* yk = y.data() + k1;
+    if (below > 0) {
+      t.resize(static_cast<size_t>(below));
+      const int32_t* r = rows + pi[k] + ncols;
+      for (int i = 0; i < below; ++i) t[static_cast<size_t>(i)] = y[static_cast<size_t>(r[i])];
+      sgemv_("T", &below, &ncols, &fminus, block + ncols, &nrows, t.data(), &one, &fone, yk, &one);
+    }
+    strsv_("L", "T", "N", &ncols, block, &nrows, yk, &one);
+  }
+  for (int32_t i = 0; i < s.n; ++i) x[perm[i]] = static_cast<double>(y[static_cast<size_t>(i)]);
 }
 
 int32_t SparseCholesky::size() const { return impl_->n; }

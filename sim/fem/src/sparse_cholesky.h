@@ -48,6 +48,16 @@ class SparseCholesky {
   // X = A^-1 B for k right-hand sides (column-major n x k), in one pass over the factor.
   void solve(const double* b, double* x, int32_t k) const;
 
+  // A single-precision copy of the current factor, for solves that only precondition (the quasi-Newton
+  // iteration's initial inverse Hessian, fem_quasi_newton.cpp): the supernodal forward and back
+  // substitutions of our own over float blocks, accumulated in double, serial (deterministic). Half the
+  // memory traffic of solve() (the substitutions are bandwidth-bound: a 48 MB factor is read twice per
+  // solve), at about 1e-6 relative accuracy. make_single() after factorize() (RuntimeError without a
+  // supernodal factor); the next factorize() or analyze() forgets the copy.
+  void make_single();
+  bool has_single() const;
+  void solve_single(const double* b, double* x) const;
+
   int32_t size() const;
   double analyze_seconds() const;   // the last analysis
   double factor_seconds() const;    // the last factorisation

@@ -397,9 +397,11 @@ ScenarioEngine fem_engine(const Scenario& s, Backend backend, const std::functio
   static_cast<EngineOptions&>(o) = engine_options(s, note);
   o.solver = s.fem_solver;
   o.stiffness_damping = s.stiffness_damping_s;
+  o.implicit_scheme = s.implicit_scheme;
   o.newton.linear_solve = s.solver.linear;
   o.newton.tolerance_mm = s.solver.tolerance_mm;
   o.newton.max_newton_iterations = s.solver.max_newton_iterations;
+  o.newton.nonlinear = s.solver.nonlinear;
   o.newton.cg_max_iterations = s.solver.max_cg_iterations;
   if (s.solver.local_region_mm > 0) o.local_region_mm = s.solver.local_region_mm;
   o.local_region_balance_iterations = s.solver.local_region_balance;

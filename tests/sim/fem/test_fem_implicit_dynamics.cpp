@@ -1,13 +1,16 @@
 // Tests of ctsurg/sim/fem/fem_implicit_dynamics.h: free fall exact, a run settling to the static
 // solution for every law, frame-sized steps stable on stiff tissue with the energy decaying after a
-// release, Rayleigh damping making the decay faster, a grab held at its target, supports of single
+// release, Rayleigh damping making the decay faster; the midpoint scheme keeping a bar's first mode
+// (frequency and set damping ratio within 2 %) and the energy of a large release; a grab held at its target, supports of single
 // components, a failed step retried in halves and, past the limit, a RuntimeError that leaves the state.
 #include "ctsurg/sim/fem/fem_implicit_dynamics.h"
 
 #include "ctsurg/core/error.h"
+#include "ctsurg/sim/fem/fem_forces.h"
 #include "ctsurg/sim/fem/fem_static_solver.h"
 #include "fem_test_models.h"
 
+#include <Eigen/Eigenvalues>
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -128,6 +131,160 @@ TEST(FemImplicitDynamics, RayleighDampingRemovesEnergyFaster) {
   EXPECT_LT(mass.back(), none.back());
   EXPECT_LT(stiff.back(), none.back());
   EXPECT_GT(none.back(), 1e-6 * none.front());  // the undamped decay is visible but not instant
+}
+
+// The lowest mode of K phi = w^2 M phi on the free components of a linear-law model (K by columns from
+// the internal forces of unit displacements: exact for the linear law), phi M-normalised (#N x 3, 0 on
+// the held nodes).
+struct LowestMode {
+  double omega = 0;  // rad/s
+  std::vector<double> shape;
+};
+
+LowestMode lowest_mode(const FemModel& m, const std::vector<int32_t>& held_nodes) {
+  std::vector<uint8_t> held(3 * static_cast<size_t>(m.node_count()), 0);
+  for (const int32_t i : held_nodes) held[3 * i] = held[3 * i + 1] = held[3 * i + 2] = 1;
+  std::vector<int32_t> free;
+  for (int32_t c = 0; c < 3 * m.node_count(); ++c)
+    if (!held[c]) free.push_back(c);
+  const auto nf = static_cast<Eigen::Index>(free.size());
+  Eigen::MatrixXd k(nf, nf);
+  Eigen::VectorXd mass(nf);
+  std::vector<double> u(held.size(), 0.0), f;
+  for (Eigen::Index j = 0; j < nf; ++j) {
+    u[free[j]] = 1;
+    fem_internal_forces(m, u, f);
+    u[free[j]] = 0;
+    for (Eigen::Index i = 0; i < nf; ++i) k(i, j) = -f[free[i]];
+    mass[j] = m.node_mass[free[j] / 3];
+  }
+  const Eigen::MatrixXd sym = 0.5 * (k + k.transpose());
+  const Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> eig(sym, Eigen::MatrixXd(mass.asDiagonal()));
+  LowestMode mode;
+  mode.omega = std::sqrt(eig.eigenvalues()[0]);
+  mode.shape.assign(held.size(), 0.0);
+  for (Eigen::Index i = 0; i < nf; ++i) mode.shape[free[i]] = eig.eigenvectors()(i, 0);
+  return mode;
+}
+
+// The frequency and damping ratio of a sampled free decay q_n: the recurrence q_{n+1} = a q_n + b q_{n-1}
+// that any linear two-state scheme obeys, fitted by least squares, its roots r e^{+-i theta}: the
+// scheme's own damped frequency theta / h and decay rate -ln r / h (exact up to round-off, no peak picking).
+struct ModalResponse {
+  double omega = 0;  // undamped, sqrt(sigma^2 + omega_d^2), rad/s
+  double zeta = 0;   // sigma / omega
+};
+
+ModalResponse modal_response(const std::vector<double>& q, double h) {
+  Eigen::MatrixXd a(static_cast<Eigen::Index>(q.size() - 2), 2);
+  Eigen::VectorXd b(a.rows());
+  for (Eigen::Index n = 0; n < a.rows(); ++n) {
+    a(n, 0) = q[n + 1];
+    a(n, 1) = q[n];
+    b[n] = q[n + 2];
+  }
+  const Eigen::Vector2d c = a.colPivHouseholderQr().solve(b);
+  const double r = std::sqrt(-c[1]);  // roots of z^2 - c0 z - c1: |z|^2 = -c1
+  const double theta = std::acos(std::clamp(c[0] / (2 * r), -1.0, 1.0));
+  const double sigma = -std::log(r) / h, omega_d = theta / h;
+  ModalResponse out;
+  out.omega = std::hypot(sigma, omega_d);
+  out.zeta = sigma / out.omega;
+  return out;
+}
+
+TEST(FemImplicitDynamics, MidpointKeepsTheFirstModesFrequencyAndTheSetDampingRatio) {
+  // A soft cantilever (8 x 12 x 80 mm, 30 kPa: its first bending mode near 1-2 Hz, as an organ's lobe)
+  // released from 1 mm in that mode's shape, steps of a frame. The modal coordinate q = phi^T M u of
+  // every step gives the scheme's frequency and damping ratio, to compare with the eigenproblem's
+  // frequency and the Rayleigh ratio set (alpha = 2 zeta omega_1). Target (issue 32): within 2 %.
+  const FemModel m = test::fem_box_model(FemLaw::linear, {2, 3, 16}, {8, 12, 80}, 3e4, 0.45);
+  const auto base = nodes_where(m, 2, 0.0);
+  const LowestMode mode = lowest_mode(m, base);
+  const double scale = 1.0 / max_abs(mode.shape);  // 1 mm at the largest
+  std::vector<double> u0(mode.shape.size());
+  for (size_t c = 0; c < u0.size(); ++c) u0[c] = scale * mode.shape[c];
+  for (const double zeta : {0.0, 0.05}) {
+    for (const auto scheme : {FemImplicitScheme::midpoint, FemImplicitScheme::backward_euler}) {
+      FemImplicitOptions o;
+      o.scheme = scheme;
+      o.mass_damping = 2 * zeta * mode.omega;
+      o.newton.tolerance_mm = 1e-10;
+      FemImplicitDynamics d(m, o);
+      d.set_supports(base);
+      d.restore_state(u0, std::vector<double>(u0.size(), 0.0), 0, 0);
+      std::vector<double> q;
+      for (int n = 0; n < 240; ++n) {  // 4 s: several periods
+        double qn = 0;
+        for (size_t c = 0; c < u0.size(); ++c) qn += mode.shape[c] * m.node_mass[c / 3] * d.displacements()[c];
+        q.push_back(qn);
+        d.step(1);
+      }
+      const ModalResponse r = modal_response(q, d.dt());
+      const bool midpoint = scheme == FemImplicitScheme::midpoint;
+      std::printf("%s, zeta %.2f: first mode %.4f rad/s (%.3f Hz, w h %.3f): scheme's frequency %.4f rad/s (%+.2f %%), damping ratio %.4f\n",
+                  midpoint ? "midpoint" : "backward Euler", zeta, mode.omega, mode.omega / (2 * M_PI), mode.omega * d.dt(), r.omega,
+                  100 * (r.omega / mode.omega - 1), r.zeta);
+      if (midpoint) {
+        EXPECT_NEAR(r.omega / mode.omega, 1, 0.02) << "zeta " << zeta;
+        EXPECT_NEAR(r.zeta, zeta, zeta > 0 ? 0.02 * zeta : 1e-6) << "the step must not damp";
+      } else {
+        EXPECT_GT(r.zeta - zeta, 0.02 * std::max(zeta, 0.05)) << "backward Euler's own damping (the reason for midpoint)";
+      }
+    }
+  }
+}
+
+// Kinetic + strain energy after each step of a release from the static equilibrium of a grab (the tip
+// moved 3 mm up): no velocity to start with, so the energy to keep is the strain energy at rest.
+std::vector<double> energies_after_static_release(const FemModel& m, double stiffness_damping, int steps, FemImplicitScheme scheme) {
+  FemBoundaryConditions bc;
+  bc.fixed_nodes = nodes_where(m, 0, 0.0);
+  bc.prescribed_nodes = nodes_where(m, 0, 12.0);
+  for (std::size_t g = 0; g < bc.prescribed_nodes.size(); ++g) bc.prescribed_displacements.insert(bc.prescribed_displacements.end(), {0, 0, 3});
+  FemStaticOptions so;
+  so.tolerance_mm = 1e-9;
+  const auto bent = solve_fem_static(m, bc, {}, so);
+  FemImplicitOptions o;
+  o.scheme = scheme;
+  o.stiffness_damping = stiffness_damping;
+  o.newton.tolerance_mm = 1e-5;
+  FemImplicitDynamics d(m, o);
+  d.set_supports(bc.fixed_nodes);
+  d.restore_state(bent.displacements, std::vector<double>(bent.displacements.size(), 0.0), 0, 0);
+  std::vector<double> e{d.strain_energy()};
+  for (int k = 0; k < steps; ++k) {
+    d.step(1);
+    e.push_back(d.kinetic_energy() + d.strain_energy());
+  }
+  return e;
+}
+
+TEST(FemImplicitDynamics, MidpointStepsKeepTheEnergyAndNeverGainItWithStiffnessDamping) {
+  // A large release (3 mm on a 12 mm beam) on the nonlinear laws, 60 steps of a frame: without Rayleigh
+  // damping midpoint with the discrete gradient keeps the energy (to the Newton tolerance; the plain
+  // midpoint rule doubled it here within 60 steps), where backward Euler loses nearly all of it; with
+  // stiffness damping the energy falls step after step.
+  for (auto law : {FemLaw::neo_hookean, FemLaw::corotational}) {
+    const FemModel m = implicit_beam(law, 3e3);
+    const auto kept = energies_after_static_release(m, 0, 60, FemImplicitScheme::midpoint);
+    const auto damped = energies_after_static_release(m, 0.01, 60, FemImplicitScheme::midpoint);
+    const auto euler = energies_after_static_release(m, 0, 60, FemImplicitScheme::backward_euler);
+    double lo = kept.front(), hi = kept.front();
+    for (const double e : kept) {
+      lo = std::min(lo, e);
+      hi = std::max(hi, e);
+    }
+    std::printf("%s, 3 kPa: energy %.6g nJ released; after 60 steps of 1/60 s: midpoint %.6g (range %.6g .. %.6g), with beta 0.01 s %.3g, "
+                "backward Euler %.3g\n",
+                fem_law_name(law), kept.front(), kept.back(), lo, hi, damped.back(), euler.back());
+    EXPECT_GT(lo, (1 - 1e-4) * kept.front()) << fem_law_name(law);
+    EXPECT_LT(hi, (1 + 1e-4) * kept.front()) << fem_law_name(law);
+    for (std::size_t k = 1; k < damped.size(); ++k)
+      EXPECT_LE(damped[k], damped[k - 1] * (1 + 1e-9) + 1e-12 * damped[0]) << fem_law_name(law) << " step " << k;
+    EXPECT_LT(damped.back(), 0.5 * damped.front());
+    EXPECT_LT(euler.back(), 0.01 * euler.front());
+  }
 }
 
 TEST(FemImplicitDynamics, AGrabIsHeldAtItsTargetAndComponentSupportsHoldOnlyTheirAxis) {

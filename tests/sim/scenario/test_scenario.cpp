@@ -319,6 +319,19 @@ TEST(Scenario, SolverSectionAxesAndTheNewFemModels) {
       "output: {trajectory: o.h5}\nfixed:\n  - {label: 1, axes: [y]}\n";
   EXPECT_EQ(parse_scenario(springs, "f.yaml", "/b").fixed[0].axes, 2);
   expect_error(springs + "solver: {tolerance_mm: 0.1}\n", "solver: only for kind: fem");
+  // Issue 32: the nonlinear iteration (solver.nonlinear) and the implicit scheme (time.integrator).
+  EXPECT_EQ(s.solver.nonlinear, ctsurg::sim::FemNonlinearSolve::newton);
+  EXPECT_EQ(s.implicit_scheme, ctsurg::sim::FemImplicitScheme::backward_euler);
+  const auto q = parse_scenario(replaced(replaced(base, "linear: direct", "nonlinear: quasi_newton"), "time: {duration_s: 1}",
+                                         "time: {duration_s: 1, integrator: midpoint}"),
+                                "f.yaml", "/b");
+  EXPECT_EQ(q.solver.nonlinear, ctsurg::sim::FemNonlinearSolve::quasi_newton);
+  EXPECT_EQ(q.implicit_scheme, ctsurg::sim::FemImplicitScheme::midpoint);
+  expect_error(replaced(base, "linear: direct", "nonlinear: bfgs"), "solver.nonlinear");
+  expect_error(replaced(base, "time: {duration_s: 1}", "time: {duration_s: 1, integrator: bdf2}"), "time.integrator");
+  expect_error(replaced(replaced(replaced(base, "solver: implicit", "solver: static"), ", stiffness_damping_s: 0.01", ""), "time: {duration_s: 1}",
+                        "time: {duration_s: 1, integrator: midpoint}"),
+               "time.integrator: only for kind: fem with solver: implicit");
 }
 
 // The law is the material section's (material.law) with its own constants; the old spelling

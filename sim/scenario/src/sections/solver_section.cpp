@@ -9,11 +9,15 @@ namespace ctsurg::sim {
 namespace {
 
 SolverSpec solver_of(const YamlField& f) {
-  f.only({"linear", "tolerance_mm", "max_newton_iterations", "max_cg_iterations", "local_region"});
+  f.only({"linear", "nonlinear", "tolerance_mm", "max_newton_iterations", "max_cg_iterations", "local_region"});
   SolverSpec s;
   if (f.has("linear")) {
     const std::string kind = f.child("linear").one_of({"auto", "direct", "iterative"});
     s.linear = kind == "direct" ? FemLinearSolve::direct : kind == "iterative" ? FemLinearSolve::iterative : FemLinearSolve::automatic;
+  }
+  if (f.has("nonlinear")) {
+    const std::string kind = f.child("nonlinear").one_of({"newton", "quasi_newton"});
+    s.nonlinear = kind == "quasi_newton" ? FemNonlinearSolve::quasi_newton : FemNonlinearSolve::newton;
   }
   if (f.has("tolerance_mm")) {
     s.tolerance_mm = f.child("tolerance_mm").positive();

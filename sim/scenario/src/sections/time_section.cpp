@@ -8,7 +8,7 @@ namespace ctsurg::sim {
 
 void parse_time_section(const YamlField& top, Scenario& s) {
   const YamlField t = top.child("time");
-  t.only({"duration_s", "dt_s", "safety_factor", "max_step_halvings"});
+  t.only({"duration_s", "dt_s", "safety_factor", "max_step_halvings", "integrator"});
   // Bounds of a rehearsal, not of physics: at most a day of simulated time, steps of at least a
   // nanosecond (the explicit models' critical steps are microseconds to milliseconds). How long a
   // run within them takes on this machine is estimated when it starts (ctsurg-sim --force).
@@ -29,6 +29,13 @@ void parse_time_section(const YamlField& top, Scenario& s) {
   if (t.has("safety_factor")) {
     s.safety_factor = t.child("safety_factor").positive();
     if (s.safety_factor > 1) t.child("safety_factor").fail("must be in (0, 1]");
+  }
+  if (t.has("integrator")) {
+    // fem implicit: backward Euler (damps every mode by the step) or the implicit midpoint rule (keeps
+    // the motion; the damping is the material's Rayleigh constants), fem/fem_implicit_dynamics.h.
+    const YamlField i = t.child("integrator");
+    if (s.model != ModelKind::fem || s.fem_solver != FemSolver::implicit) i.fail("only for kind: fem with solver: implicit");
+    s.implicit_scheme = i.one_of({"backward_euler", "midpoint"}) == "midpoint" ? FemImplicitScheme::midpoint : FemImplicitScheme::backward_euler;
   }
   if (t.has("max_step_halvings")) s.max_step_halvings = static_cast<int>(t.child("max_step_halvings").integer(0, 10));
   for (const auto& tool : s.tools) {

@@ -73,6 +73,7 @@ struct FemEngineOptions : EngineOptions {
   // The static solver's Newton solves (fem_static_solver.h: the linear solve, tolerances, limits);
   // threads and initial_displacements are the engine's.
   FemStaticOptions newton;
+  FemImplicitScheme implicit_scheme = FemImplicitScheme::backward_euler;  // solver implicit (fem_implicit_dynamics.h)
   // Contact between the model's bodies and self-contact (fem_contact.h): solver dynamic, cpu.
   FemContactOptions contact;
   // Local region deformation (fem_local_region.h): the geodesic radius R (mm, > 0) of the region around

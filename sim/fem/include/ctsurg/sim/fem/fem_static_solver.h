@@ -63,6 +63,18 @@ enum class FemLinearSolve { automatic, direct, iterative };  // see above
 // tangent has no Cholesky factor is assembled again projected, so Newton keeps its quadratic
 // convergence wherever the exact tangent is positive definite); always.
 enum class FemTangentProjection { never, when_needed, always };
+// The nonlinear iteration. newton: above. quasi_newton: L-BFGS (Nocedal and Wright, Numerical
+// Optimization, algorithm 7.4) whose initial inverse Hessian is the factor of the rest tangent K_0 (+ the
+// time step's c_m M), made once per held set and kept across iterations, frames and steps (Liu, Bouaziz
+// and Kavan 2017, "Quasi-Newton Methods for Real-time Simulation of Hyperelastic Materials"): an
+// iteration costs one force evaluation and one pair of triangular solves, no element Hessian and no
+// factorisation, where Newton assembles the tangent every iteration. Its first step lifts the held
+// components with K_0 as Newton's lifts them with the tangent; the line search and the stopping rule are
+// Newton's. Needs the direct solve (an iterative one falls back to newton) and a potential (the implicit
+// midpoint scheme's discrete gradient has none: its steps use newton); an iteration count past
+// max_quasi_newton_iterations continues with Newton from where it stopped (report.quasi_newton_fallbacks),
+// so a solve converges wherever Newton's does (src/fem_quasi_newton.cpp).
+enum class FemNonlinearSolve { newton, quasi_newton };
 
 struct FemStaticOptions {
   double residual_tolerance = 1e-8;      // relative to r_ref (see above)
@@ -87,6 +99,9 @@ struct FemStaticOptions {
   FemTangentProjection projection = FemTangentProjection::when_needed;
   int64_t direct_max_bytes = 0;          // automatic: the direct solve while its factor fits (0: half the memory available)
   int reuse_cg_iterations = 12;          // direct: CG iterations on an old factor before refactorising
+  FemNonlinearSolve nonlinear = FemNonlinearSolve::newton;  // see above
+  int lbfgs_history = 5;                 // quasi_newton: the (s, y) pairs kept, [1, 50]
+  int max_quasi_newton_iterations = 60;  // quasi_newton: per load step, then Newton
 };
 
 struct FemStaticReport {
@@ -97,8 +112,8 @@ struct FemStaticReport {
   std::vector<int> cg_iterations;         // per Newton iteration
   std::vector<double> residual_history;   // ||r||_2 (uN) before the first and after every iteration
   std::vector<double> load_factors;       // the load factor (0, 1] of every accepted increment
-  double reference_residual = 0;          // r_ref, uN
-  double relative_residual = 0;           // final ||r|| / r_ref
+  double reference_residual = 0;          // r_ref, uN (NaN: not needed, quasi-Newton with tolerance_mm)
+  double relative_residual = 0;           // final ||r|| / r_ref (NaN where r_ref is)
   double seconds = 0;                     // wall time of the whole solve
   double assembly_seconds = 0;            // element stiffnesses + sparse assembly
   double solve_seconds = 0;               // preconditioner + CG
@@ -107,6 +122,8 @@ struct FemStaticReport {
   bool direct = false;                    // the linear solves were direct (CHOLMOD)
   int factorizations = 0;                 // numeric factorisations in this solve
   int64_t factor_bytes = 0;               // the factor's size (direct)
+  int quasi_newton_iterations = 0;        // quasi_newton: L-BFGS iterations (the lift included)
+  int quasi_newton_fallbacks = 0;         // quasi_newton: load steps that went on with Newton
 };
 
 struct FemStaticResult {

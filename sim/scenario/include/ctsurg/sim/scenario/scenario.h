@@ -124,6 +124,8 @@ struct SolverSpec {
   FemLinearSolve linear = FemLinearSolve::automatic;  // auto | direct | iterative
   double tolerance_mm = 0;         // the stopping rule in mm; 0 = the solvers' relative default
   int max_newton_iterations = 25;  // per solve or step
+  // nonlinear: newton | quasi_newton (L-BFGS on the rest stiffness's factor, fem_static_solver.h)
+  FemNonlinearSolve nonlinear = FemNonlinearSolve::newton;
   int max_cg_iterations = 0;       // iterative: 0 = twice the unknowns
   // local_region: {radius_mm: R}: Newton only within R mm (geodesic) of the tools' nodes, the rest from
   // the linear model factorised once (fem/fem_local_region.h); solver static, a grab or force tool.
@@ -206,6 +208,7 @@ struct Scenario {
   std::vector<ToolAction> tools;
   double duration_s = 0;            // (0, kMaxDurationS]
   double dt_s = 0;                  // 0 = auto (safety_factor * critical step), else >= kMinStepS
+  FemImplicitScheme implicit_scheme = FemImplicitScheme::backward_euler;  // fem implicit: time.integrator
   double safety_factor = 0.5;       // (0, 1]
   int max_step_halvings = 0;        // on instability: restart from the last frame with dt / 2, this often
   double frame_interval_s = 0;      // output frame every ...; > 0
