@@ -5,7 +5,9 @@
 //   - the linear law on linear tets, where the supports alone hold the model: the stiffness factorised
 //     once, a condensed solve each frame (fem_linear_static_solver.h);
 //   - otherwise Newton (fem_static_solver.h: direct or iterative solves, the factor kept across frames),
-//     which also holds a grab that completes the supports (a roller and a grab).
+//     which also holds a grab that completes the supports (a roller and a grab). With quasi-Newton
+//     (options.newton.nonlinear) a frame starts from the last two frames' linear extrapolation, 2 u_k -
+//     u_{k-1}, while the grabs hold the same nodes (a drag: the tool's steady motion carried over).
 #include "ctsurg/core/error.h"
 #include "ctsurg/sim/fem/fem_engine.h"
 #include "ctsurg/sim/fem/fem_forces.h"
@@ -98,7 +100,19 @@ class FemStaticIntegrator final : public FemIntegrator {
     } else {
       bc_.prescribed_nodes = grab_nodes_;
       bc_.prescribed_displacements = grab_displacements_;
-      r = newton_solver_->solve(bc_, loads, warm_start ? &u : nullptr);  // warm start from the previous frame
+      const std::vector<double>* start = warm_start ? &u : nullptr;  // warm start from the previous frame
+      const bool extrapolate = options_.newton.nonlinear == FemNonlinearSolve::quasi_newton && warm_start &&
+                               previous_u_.size() == u.size() && grab_nodes_ == previous_grab_nodes_;
+      if (extrapolate) {
+        extrapolated_.resize(u.size());
+        for (size_t d = 0; d < u.size(); ++d) extrapolated_[d] = 2 * u[d] - previous_u_[d];
+        start = &extrapolated_;
+      }
+      r = newton_solver_->solve(bc_, loads, start);
+      if (options_.newton.nonlinear == FemNonlinearSolve::quasi_newton) {
+        previous_u_ = u;
+        previous_grab_nodes_ = grab_nodes_;
+      }
     }
     if (!r.report.converged) {
       throw RuntimeError(options_.where + ": the static FEM solve at t = " + std::to_string(time) +
@@ -133,6 +147,9 @@ class FemStaticIntegrator final : public FemIntegrator {
   double time_ = 0;
   std::vector<int32_t> grab_nodes_;  // scratch
   std::vector<double> grab_displacements_;
+  // Quasi-Newton: the frame before the last (its u and grabbed nodes), and the extrapolated start.
+  std::vector<double> previous_u_, extrapolated_;
+  std::vector<int32_t> previous_grab_nodes_;
   std::vector<int32_t> seeds_;        // scratch: the tools' nodes the local region grows from
   std::vector<double> seed_radii_;    // scratch: each seed's radius (its tool's local_region_mm or the engine's), mm
 };
