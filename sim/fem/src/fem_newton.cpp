@@ -367,6 +367,27 @@ void FemNewton::damping_tangent() {
   last_s_ = NAN;  // forces() has the damping term from now on
 }
 
+void FemNewton::gather_system(const std::vector<double>& kbuf, double scale, const std::vector<double>* kbuf_n, double cb) {
+  double* values = k_.valuePtr();
+  const int64_t nnz = k_.nonZeros();
+  const int64_t* off = contrib_offsets_.data();
+  const int64_t* con = contrib_.data();
+  const double* kb = kbuf.data();
+  const double* kn = kbuf_n != nullptr ? kbuf_n->data() : nullptr;
+#pragma omp parallel for schedule(static) num_threads(threads_)
+  for (int64_t z = 0; z < nnz; ++z) {
+    double v = 0;
+    for (int64_t c = off[z]; c < off[z + 1]; ++c) v += kn ? kb[con[c]] + cb * kn[con[c]] : kb[con[c]];
+    values[z] = scale * v;
+  }
+  if (terms_.mass != 0) {
+    for (std::size_t k = 0; k < free_component_.size(); ++k) values[diagonal_[k]] += terms_.mass * m_.node_mass[free_component_[k] / 3];
+  }
+  double sum = 0;
+  for (const int64_t z : diagonal_) sum += values[z];
+  mean_diagonal_ = diagonal_.empty() ? 1.0 : std::max(sum / static_cast<double>(diagonal_.size()), 1e-300);
+}
+
 int32_t FemNewton::assemble(const std::vector<double>& u, bool project) {
   if (terms_.stiffness_damping != 0 && !damping_ready_) damping_tangent();
   assembled_at_ = &u;
@@ -392,25 +413,7 @@ int32_t FemNewton::assemble(const std::vector<double>& u, bool project) {
           k[ne_ * a + b] += c > 0 ? 2 * c * ((a == b ? 1.0 : 0.0) - delta[a] * delta[b] / dd) : -2 * c * delta[a] * delta[b] / dd;
     }
   }
-  double* values = k_.valuePtr();
-  const int64_t nnz = k_.nonZeros();
-  const int64_t* off = contrib_offsets_.data();
-  const int64_t* con = contrib_.data();
-  const double* kb = kbuf_.data();
-  const double* kn = terms_.stiffness_damping != 0 ? kbuf_n_.data() : nullptr;
-  const double cb = terms_.stiffness_damping;
-#pragma omp parallel for schedule(static) num_threads(threads_)
-  for (int64_t z = 0; z < nnz; ++z) {
-    double v = 0;
-    for (int64_t c = off[z]; c < off[z + 1]; ++c) v += kn ? kb[con[c]] + cb * kn[con[c]] : kb[con[c]];
-    values[z] = v;
-  }
-  if (terms_.mass != 0) {
-    for (std::size_t k = 0; k < free_component_.size(); ++k) values[diagonal_[k]] += terms_.mass * m_.node_mass[free_component_[k] / 3];
-  }
-  double sum = 0;
-  for (const int64_t z : diagonal_) sum += values[z];
-  mean_diagonal_ = diagonal_.empty() ? 1.0 : std::max(sum / static_cast<double>(diagonal_.size()), 1e-300);
+  gather_system(kbuf_, 1.0, terms_.stiffness_damping != 0 ? &kbuf_n_ : nullptr, terms_.stiffness_damping);
   // The linear law's tangent does not depend on u: a factor of it stays current (set_terms and
   // build_system say when its coefficients or pattern change).
   if (!m_.every_law(FemLaw::linear)) factor_current_ = false;

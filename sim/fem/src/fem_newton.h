@@ -133,6 +133,9 @@ class FemNewton {
   // fem_quasi_newton.cpp: L-BFGS at load factor s (true when converged; u stays a valid state either way).
   bool quasi_newton(std::vector<double>& u, double s, FemStaticReport& rep, std::string& failure);
   void factor_rest();  // J_0 into k_ and its factor (quasi-Newton's initial inverse Hessian)
+  // k_'s values from element matrices: scale sum(kbuf (+ cb kbuf_n)) per non-zero, + c_m M on the
+  // diagonal; mean_diagonal_ of the result.
+  void gather_system(const std::vector<double>& kbuf, double scale, const std::vector<double>* kbuf_n, double cb);
   void build_system();
   void damping_tangent();
   std::string node_of_column(int64_t column) const;
@@ -171,6 +174,7 @@ class FemNewton {
   void discrete_gradient(const std::vector<double>& w);
   bool rest_factor_ = false;
   double rest_mass_ = 0, rest_damping_ = 0;
+  double rest_mean_diagonal_ = 1;  // mean(diag J_0): quasi-Newton's residual displacement scale
 };
 
 // "element e (rest centroid (x, y, z) mm)" in LPS, for messages.

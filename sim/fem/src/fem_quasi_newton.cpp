@@ -53,25 +53,9 @@ void FemNewton::factor_rest() {
     rest_kbuf_.resize(kbuf_.size());
     cpu::fem_stiffness(el_, rest.data(), rest_kbuf_.data(), threads_, o_.projection == FemTangentProjection::always);
   }
-  const double scale = 1 + terms_.stiffness_damping;  // c_b K_n taken at rest too
-  double* values = k_.valuePtr();
-  const int64_t nnz = k_.nonZeros();
-  const int64_t* off = contrib_offsets_.data();
-  const int64_t* con = contrib_.data();
-  const double* kb = rest_kbuf_.data();
-#pragma omp parallel for schedule(static) num_threads(threads_)
-  for (int64_t z = 0; z < nnz; ++z) {
-    double v = 0;
-    for (int64_t c = off[z]; c < off[z + 1]; ++c) v += kb[con[c]];
-    values[z] = scale * v;
-  }
-  if (terms_.mass != 0) {
-    for (std::size_t k = 0; k < free_component_.size(); ++k) values[diagonal_[k]] += terms_.mass * m_.node_mass[free_component_[k] / 3];
-  }
-  double sum = 0;
-  for (const int64_t z : diagonal_) sum += values[z];
-  mean_diagonal_ = diagonal_.empty() ? 1.0 : std::max(sum / static_cast<double>(diagonal_.size()), 1e-300);
-  const int64_t failed = cholesky_->factorize(values);
+  gather_system(rest_kbuf_, 1 + terms_.stiffness_damping, nullptr, 0);  // c_b K_n taken at rest too
+  rest_mean_diagonal_ = mean_diagonal_;
+  const int64_t failed = cholesky_->factorize(k_.valuePtr());
   if (failed >= 0) {
     throw RuntimeError(where_ + ": the rest stiffness is not positive definite at " + node_of_column(failed) +
                        " (an element near it is degenerate, or the held components leave that part of the mesh free to move rigidly)");
@@ -124,7 +108,6 @@ bool FemNewton::quasi_newton(std::vector<double>& u, double s, FemStaticReport& 
       slope = r.dot(d);
     }
     rep.solve_seconds += seconds_since(t0);
-    rep.cg_iterations.push_back(0);
     ++rep.quasi_newton_iterations;
     if (!d.allFinite()) {
       failure = "the quasi-Newton direction has non-finite values at load factor " + std::to_string(s);
@@ -160,7 +143,7 @@ bool FemNewton::quasi_newton(std::vector<double>& u, double s, FemStaticReport& 
     lifting = held_gap(u, s, gap);
     if (lifting) continue;
     if (in_mm) {
-      if (alpha == 1 && step_inf <= o_.tolerance_mm && (r.size() == 0 || r.lpNorm<Eigen::Infinity>() / mean_diagonal_ <= o_.tolerance_mm))
+      if (alpha == 1 && step_inf <= o_.tolerance_mm && (r.size() == 0 || r.lpNorm<Eigen::Infinity>() / rest_mean_diagonal_ <= o_.tolerance_mm))
         return true;
     } else if (rnorm <= o_.residual_tolerance * rep.reference_residual && step_inf <= o_.displacement_tolerance * diag_) {
       return true;

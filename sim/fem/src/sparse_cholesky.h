@@ -52,7 +52,8 @@ class SparseCholesky {
   // iteration's initial inverse Hessian, fem_quasi_newton.cpp): the supernodal forward and back
   // substitutions of our own over float blocks, accumulated in double, serial (deterministic). Half the
   // memory traffic of solve() (the substitutions are bandwidth-bound: a 48 MB factor is read twice per
-  // solve), at about 1e-6 relative accuracy. make_single() after factorize() (RuntimeError without a
+  // solve), to float's precision times the matrix's conditioning (not checked here: its callers only
+  // precondition, and converge on the double-precision residual). make_single() after factorize() (RuntimeError without a
   // supernodal factor); the next factorize() or analyze() forgets the copy.
   void make_single();
   bool has_single() const;
