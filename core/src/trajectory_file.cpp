@@ -81,10 +81,27 @@ std::string trajectory_xdmf(const std::string& h5, const Trajectory& t) {
     x << "    <Grid Name=\"particles\" GridType=\"Collection\" CollectionType=\"Temporal\">\n";
     for (int64_t i = 0; i < nf; ++i) {
       x << "      <Grid Name=\"particles " << i << "\" GridType=\"Uniform\">\n"
-        << "        <Time Value=\"" << t.time[i] << "\"/>\n"
-        << "        <Topology TopologyType=\"Polyvertex\" NumberOfElements=\"" << p << "\"/>\n"
-        << "        <Geometry GeometryType=\"XYZ\">" << slab("/trajectory/particles/positions", i, p, f) << "</Geometry>\n"
-        << "      </Grid>\n";
+        << "        <Time Value=\"" << t.time[i] << "\"/>\n";
+      if (t.element_count() > 0) {
+        // The FE mesh itself (quadratic tets: Tetrahedron_10, VTK_QUADRATIC_TETRA's order) with its displacement.
+        const std::string e = std::to_string(t.element_count()), npe = std::to_string(t.element_nodes);
+        x << "        <Topology TopologyType=\"" << (t.element_nodes == 10 ? "Tetrahedron_10" : "Tetrahedron") << "\" NumberOfElements=\"" << e
+          << "\">\n"
+          << "          <DataItem Dimensions=\"" << e << " " << npe << "\" NumberType=\"Int\" Precision=\"4\" Format=\"HDF\">" << h5
+          << ":/trajectory/particles/elements</DataItem>\n"
+          << "        </Topology>\n";
+      } else {
+        x << "        <Topology TopologyType=\"Polyvertex\" NumberOfElements=\"" << p << "\"/>\n";
+      }
+      x << "        <Geometry GeometryType=\"XYZ\">" << slab("/trajectory/particles/positions", i, p, f) << "</Geometry>\n";
+      if (t.element_count() > 0) {
+        x << "        <Attribute Name=\"displacement_mm\" AttributeType=\"Vector\" Center=\"Node\">\n"
+          << "          <DataItem ItemType=\"Function\" Function=\"$0 - $1\" Dimensions=\"" << p << " 3\">"
+          << slab("/trajectory/particles/positions", i, p, f) << "<DataItem Dimensions=\"" << p
+          << " 3\" NumberType=\"Float\" Precision=\"4\" Format=\"HDF\">" << h5 << ":/trajectory/particles/rest_positions</DataItem></DataItem>\n"
+          << "        </Attribute>\n";
+      }
+      x << "      </Grid>\n";
     }
     x << "    </Grid>\n";
   }
@@ -168,6 +185,17 @@ void validate_trajectory(const Trajectory& t, const std::string& file) {
   if (t.spheres.size() != nf * t.sphere_kinds.size() * 4) {
     throw InputError(file, "/trajectory/tools/spheres", "expected (F, S, 4) with S = the number of sphere kinds");
   }
+  if (!t.sphere_loads.empty()) {
+    if (t.sphere_loads.size() != nf * t.sphere_kinds.size() * 7) {
+      throw InputError(file, "/trajectory/tools/sphere_loads", "expected (F, S, 7) with S = the number of sphere kinds");
+    }
+    require_finite(t.sphere_loads, 7, file, "/trajectory/tools/sphere_loads");
+    for (size_t r = 0; r < t.sphere_loads.size(); r += 7) {
+      if (t.sphere_loads[r] != 0.0 && t.sphere_loads[r] != 1.0) {
+        throw InputError(file, "/trajectory/tools/sphere_loads", "row " + std::to_string(r / 7) + ": measured must be 0 or 1");
+      }
+    }
+  }
   if (t.blades.size() % (nf * 7) != 0) throw InputError(file, "/trajectory/tools/blades", "expected (F, B, 7)");
   if (t.stitches.size() % (nf * 7) != 0) throw InputError(file, "/trajectory/tools/stitches", "expected (F, K, 7)");
   require_finite(t.stitches, 7, file, "/trajectory/tools/stitches");
@@ -206,6 +234,21 @@ void validate_trajectory(const Trajectory& t, const std::string& file) {
   for (const auto& m : t.metrics) require_finite(m.values, 1, file, "/trajectory/metrics/" + m.name);
   require_finite(t.spheres, 4 * t.sphere_kinds.size(), file, "/trajectory/tools/spheres (row = frame)");
   require_finite(t.blades, 7, file, "/trajectory/tools/blades");
+  if (!t.elements.empty() || t.element_nodes != 0) {
+    if (t.rest_particles.empty()) throw InputError(file, "/trajectory/particles/elements", "elements need the particles");
+    if (t.element_nodes != 4 && t.element_nodes != 10) throw InputError(file, "/trajectory/particles/elements", "expected 4 or 10 nodes per element");
+    if (t.elements.empty() || t.elements.size() % static_cast<size_t>(t.element_nodes) != 0) {
+      throw InputError(file, "/trajectory/particles/elements", "expected (E, " + std::to_string(t.element_nodes) + ") with E > 0");
+    }
+    const int64_t np = t.particle_count();
+    for (size_t k = 0; k < t.elements.size(); ++k) {
+      if (t.elements[k] < 0 || t.elements[k] >= np) {
+        throw InputError(file, "/trajectory/particles/elements",
+                         "element " + std::to_string(k / static_cast<size_t>(t.element_nodes)) + " names particle " + std::to_string(t.elements[k]) +
+                             ", out of range [0, " + std::to_string(np) + ")");
+      }
+    }
+  }
   require_finite(t.rest_particles, 3, file, "/trajectory/particles/rest_positions");
   require_finite(t.particles, t.rest_particles.size(), file, "/trajectory/particles/positions (row = frame)");
 }
@@ -272,6 +315,9 @@ void write_trajectory_file(const std::filesystem::path& path, const Trajectory& 
           }
           tools.write_dataset("instrument_poses", t.instrument_poses, std::array<uint64_t, 3>{nf, t.instruments.size(), 8});
         }
+        if (!t.sphere_loads.empty()) {
+          tools.write_dataset("sphere_loads", t.sphere_loads, std::array<uint64_t, 3>{nf, t.sphere_kinds.size(), 7});
+        }
         if (!t.stitches.empty()) {
           tools.write_dataset("stitches", t.stitches, std::array<uint64_t, 3>{nf, static_cast<uint64_t>(t.stitch_count()), 7});
         }
@@ -281,6 +327,10 @@ void write_trajectory_file(const std::filesystem::path& path, const Trajectory& 
           const std::array<uint64_t, 3> fp3{nf, np, 3};
           p.write_dataset("rest_positions", t.rest_particles, p3);
           p.write_dataset("positions", t.particles, fp3);
+          if (!t.elements.empty()) {
+            p.write_dataset("elements", t.elements,
+                            std::array<uint64_t, 2>{static_cast<uint64_t>(t.element_count()), static_cast<uint64_t>(t.element_nodes)});
+          }
         }
       },
       trajectory_xdmf(path.filename().string(), t));
@@ -362,6 +412,10 @@ Trajectory read_trajectory_file(const std::filesystem::path& path) {
     t.instrument_poses = tools.read_dataset<double>("instrument_poses", &shape);
     expect(tools, "instrument_poses", {nf, static_cast<int64_t>(t.instruments.size()), 8});
   }
+  if (tools.has("sphere_loads")) {  // optional: files from before tool loads, or without a measured one, have none
+    t.sphere_loads = tools.read_dataset<double>("sphere_loads", &shape);
+    expect(tools, "sphere_loads", {nf, static_cast<int64_t>(t.sphere_kinds.size()), 7});
+  }
   if (tools.has("stitches")) {  // optional: files from before sutures have none
     t.stitches = tools.read_dataset<double>("stitches", &shape);
     expect(tools, "stitches", {nf, -1, 7});
@@ -373,6 +427,11 @@ Trajectory read_trajectory_file(const std::filesystem::path& path) {
     const int64_t np = static_cast<int64_t>(shape[0]);
     t.particles = p.read_dataset<float>("positions", &shape);
     expect(p, "positions", {nf, np, 3});
+    if (p.has("elements")) {  // optional: FEM runs (files from before it, and other models, have none)
+      t.elements = p.read_dataset<int32_t>("elements", &shape);
+      expect(p, "elements", {-1, -1});
+      t.element_nodes = static_cast<int32_t>(std::min<uint64_t>(shape[1], 1000));
+    }
   }
   validate_trajectory(t, file);
   return t;

@@ -229,6 +229,55 @@ TEST(TrajectoryFile, StitchesAndClosingTrianglesRoundTripAndAreChecked) {
   refused(bad, "/trajectory/surface/closing_triangles");
 }
 
+// The tools' loads (sphere_loads) and an FEM's elements over its particles round-trip and are checked;
+// the XDMF sidecar shows the particles as the FE mesh (quadratic: Tetrahedron_10) with a displacement.
+TEST(TrajectoryFile, SphereLoadsAndElementsRoundTripAndAreChecked) {
+  TempDir dir;
+  auto t = three_frames(false);
+  t.sphere_loads.assign(3 * 2 * 7, 0.0);
+  t.sphere_loads[7 * 2] = 1.0;  // frame 1, the grab: measured
+  t.sphere_loads[7 * 2 + 3] = 0.25;
+  t.sphere_loads[7 * 2 + 4] = -1.5;
+  // Ten particles: one quadratic tet (4 corners, 6 edge midpoints).
+  t.rest_particles = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, 0.5f, 0, 0, 0.5f, 0.5f, 0, 0, 0.5f, 0, 0, 0, 0.5f, 0.5f, 0, 0.5f, 0, 0.5f, 0.5f};
+  for (int f = 0; f < 3; ++f)
+    for (size_t k = 0; k < t.rest_particles.size(); ++k) t.particles.push_back(t.rest_particles[k] + (k % 3 == 2 ? float(f) : 0.f));
+  t.elements = {0, 1, 2, 3, 4, 5, 6, 7, 8, 9};
+  t.element_nodes = 10;
+  ctsurg::write_trajectory_file(dir.path() / "l.h5", t, test_provenance());
+  const auto r = ctsurg::read_trajectory_file(dir.path() / "l.h5");
+  EXPECT_EQ(r.sphere_loads, t.sphere_loads);
+  EXPECT_EQ(r.elements, t.elements);
+  EXPECT_EQ(r.element_nodes, 10);
+  const std::string xdmf = read_trajectory_text(dir.path() / "l.xdmf");
+  EXPECT_NE(xdmf.find("TopologyType=\"Tetrahedron_10\" NumberOfElements=\"1\""), std::string::npos);
+  EXPECT_NE(xdmf.find(":/trajectory/particles/elements"), std::string::npos);
+  // Without either: read as none.
+  ctsurg::write_trajectory_file(dir.path() / "o.h5", three_frames(true), test_provenance());
+  const auto old = ctsurg::read_trajectory_file(dir.path() / "o.h5");
+  EXPECT_TRUE(old.sphere_loads.empty());
+  EXPECT_TRUE(old.elements.empty());
+  EXPECT_EQ(old.element_nodes, 0);
+  auto bad = t;
+  bad.sphere_loads.pop_back();
+  refused(bad, "/trajectory/tools/sphere_loads");
+  bad = t;
+  bad.sphere_loads[0] = 0.5;  // the measured flag
+  refused(bad, "/trajectory/tools/sphere_loads");
+  bad = t;
+  bad.sphere_loads[3] = std::numeric_limits<double>::infinity();
+  refused(bad, "/trajectory/tools/sphere_loads");
+  bad = t;
+  bad.elements[9] = 10;  // no such particle
+  refused(bad, "/trajectory/particles/elements");
+  bad = t;
+  bad.element_nodes = 5;
+  refused(bad, "/trajectory/particles/elements");
+  bad = t;
+  bad.elements.pop_back();
+  refused(bad, "/trajectory/particles/elements");
+}
+
 TEST(TrajectoryFile, InstrumentsRoundTripAndAreChecked) {
   // A tetrahedral instrument at a pose per frame (active from frame 1, turned 90 degrees about z): its
   // mesh comes back once, its poses per frame; a trajectory without one reads as none.

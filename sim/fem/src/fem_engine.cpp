@@ -382,6 +382,18 @@ void FemEngine::check_tools(const std::vector<ToolInput>& tools) const {
   for (const ToolInput& tool : tools) {
     switch (tool.acts) {
       case ToolPrimitive::hold:
+        if (tool.grip == HoldGrip::volume) {
+          if (options_.solver == FemSolver::dynamic) {
+            throw InputError(options_.where, tool.label,
+                             "grip: volume needs solver: static_equilibrium or implicit (its penalty is stiff: the explicit "
+                             "dynamics' critical step would shrink to it); use grip: nodes with solver: dynamic");
+          }
+          if (options_.local_region_mm) {
+            throw InputError(options_.where, tool.label,
+                             "grip: volume and a local region are not supported together (the region's solve holds node sets); use grip: nodes");
+          }
+        }
+        break;
       case ToolPrimitive::load:
         break;
       case ToolPrimitive::separate:

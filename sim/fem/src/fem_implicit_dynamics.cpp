@@ -5,6 +5,7 @@
 #include "device_conjugate_gradient.h"
 #include "fem_newton.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <string>
@@ -73,6 +74,18 @@ void FemImplicitDynamics::clear_prescribed() {
   prescribed_.clear();
 }
 
+void FemImplicitDynamics::set_grips(std::vector<FemGrip> grips) {
+  std::vector<std::vector<double>> start;
+  for (const FemGrip& g : grips) {
+    const FemGrip* before = nullptr;
+    for (const FemGrip& o : grips_)
+      if (o.elements == g.elements && o.nodes == g.nodes) before = &o;
+    start.push_back(before != nullptr ? before->target : g.target);
+  }
+  grips_ = std::move(grips);
+  grip_start_ = std::move(start);
+}
+
 void FemImplicitDynamics::set_external_forces(const std::vector<double>& forces) {
   const std::size_t n3 = 3 * static_cast<std::size_t>(model_.node_count());
   if (!forces.empty() && forces.size() != n3) throw InputError(kImplicitWhere, "forces", "expected #N x 3 values or none");
@@ -114,7 +127,17 @@ bool FemImplicitDynamics::advance(double h, const std::vector<double>& start, do
     for (std::size_t d = 0; d < n3; ++d)
       if (held[d]) target[d] = 0.5 * (u_[d] + target[d]);
   }
+  // The grips' targets at the sub-step's end (the midpoint scheme: at its middle).
+  std::vector<FemGrip> grips = grips_;
+  const double f0 = std::max(0.0, fraction - h / options_.dt);
+  for (std::size_t g = 0; g < grips.size(); ++g)
+    for (std::size_t k = 0; k < grips[g].target.size(); ++k) {
+      const double a = grip_start_[g][k], b = grips_[g].target[k];
+      const double end = a + fraction * (b - a);
+      grips[g].target[k] = midpoint ? 0.5 * (a + f0 * (b - a) + end) : end;
+    }
   FemNewton& newton = *newton_;
+  newton.set_grips(grips);
   newton.set_terms(std::move(terms));  // first: with inertia, no support is needed (set_held)
   newton.set_held(held, target);
   newton.set_external(external_);
@@ -165,6 +188,7 @@ FemImplicitStepReport FemImplicitDynamics::step(int steps) {
       sub *= 2;
     }
     report.substeps = std::max(report.substeps, sub);
+    for (std::size_t g = 0; g < grips_.size(); ++g) grip_start_[g] = grips_[g].target;  // the next step starts there
     time_ += options_.dt;
     ++steps_;
   }

@@ -38,6 +38,8 @@ class FemImplicitIntegrator final : public FemIntegrator {
     } else {
       implicit_->clear_prescribed();
     }
+    holds.update_grips(tools, t_next, u, true, grips_);
+    implicit_->set_grips(grips_);
     if (holds.update_forces(tools, u, false)) implicit_->set_external_forces(holds.nodal_forces());
     FemAdvance a;
     try {
@@ -71,6 +73,7 @@ class FemImplicitIntegrator final : public FemIntegrator {
   std::unique_ptr<FemImplicitDynamics> implicit_;
   std::vector<int32_t> grab_nodes_;  // scratch
   std::vector<double> grab_displacements_;
+  std::vector<FemGrip> grips_;  // scratch
 };
 
 }  // namespace

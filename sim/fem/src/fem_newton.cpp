@@ -81,6 +81,23 @@ void validate_fem_static(const FemModel& model, const FemBoundaryConditions& bc,
     if (!std::isfinite(f)) throw InputError(where, "forces", "must be finite");
   for (double g : loads.gravity)
     if (!std::isfinite(g)) throw InputError(where, "gravity", "must be finite");
+  const std::size_t npe = static_cast<std::size_t>(model.nodes_per_element());
+  for (const FemGrip& g : loads.grips) {
+    const std::size_t h = g.nodes.size();
+    if (g.element_nodes.size() != npe * g.elements.size() || g.matrices.size() != npe * npe * g.elements.size() ||
+        g.target.size() != 3 * h || g.captured.size() != 3 * h)
+      throw InputError(where, "grips", "a grip's arrays do not match its " + std::to_string(g.elements.size()) + " elements and " +
+                                           std::to_string(h) + " nodes");
+    for (int32_t e : g.elements)
+      if (e < 0 || e >= model.tet_count()) throw InputError(where, "grips", "element " + std::to_string(e) + " out of range");
+    for (int32_t i : g.nodes) check_node(i, n, "grips");
+    for (int32_t k : g.element_nodes)
+      if (k < 0 || static_cast<std::size_t>(k) >= h) throw InputError(where, "grips", "a local node index out of range");
+    for (double v : g.matrices)
+      if (!std::isfinite(v)) throw InputError(where, "grips", "a grip's matrix must be finite");
+    for (double v : g.target)
+      if (!std::isfinite(v)) throw InputError(where, "grips", "a grip's target must be finite");
+  }
   if (!(o.residual_tolerance > 0 && o.residual_tolerance < 1)) throw InputError(where, "residual_tolerance", "must be in (0, 1)");
   if (!(o.displacement_tolerance > 0 && o.displacement_tolerance < 1)) throw InputError(where, "displacement_tolerance", "must be in (0, 1)");
   if (!(o.cg_tolerance > 0 && o.cg_tolerance < 1)) throw InputError(where, "cg_tolerance", "must be in (0, 1)");
@@ -126,7 +143,8 @@ FemNewton::~FemNewton() = default;
 void FemNewton::set_held(const std::vector<uint8_t>& held, const std::vector<double>& target) {
   const int32_t n = m_.node_count();
   std::vector<uint8_t> h = held;
-  if (terms_.mass == 0) check_rigid_modes(m_, h, diag_, where_.c_str());  // inertia makes the system definite
+  // Inertia makes the system definite, and so does a grip (a spring to the tool over a volume).
+  if (terms_.mass == 0 && grips_.empty()) check_rigid_modes(m_, h, diag_, where_.c_str());
   for (int32_t i = 0; i < n; ++i)  // nodes without tets have no stiffness: held where they are
     if (m_.node_offsets[i + 1] == m_.node_offsets[i]) h[3 * i] = h[3 * i + 1] = h[3 * i + 2] = 1;
   target_ = target;
@@ -138,6 +156,39 @@ void FemNewton::set_held(const std::vector<uint8_t>& held, const std::vector<dou
 void FemNewton::set_external(const std::vector<double>& external) {
   external_ = external;
   last_s_ = NAN;
+}
+
+void FemNewton::set_grips(const std::vector<FemGrip>& grips) {
+  bool same = grips.size() == grips_.size();
+  for (std::size_t g = 0; same && g < grips.size(); ++g)
+    same = grips[g].elements == grips_[g].elements && grips[g].matrices == grips_[g].matrices;
+  grips_ = grips;
+  last_s_ = NAN;
+  if (same) return;
+  factor_current_ = false;
+  rest_factor_ = false;
+  index_grips();
+}
+
+void FemNewton::index_grips() {
+  grip_slots_.clear();
+  if (k_.rows() == 0) return;  // build_system indexes them
+  const int* ip = k_.innerIndexPtr();
+  const int* op = k_.outerIndexPtr();
+  for (const FemGrip& g : grips_)
+    for (std::size_t k = 0; k < g.elements.size(); ++k) {
+      const int32_t* local = &g.element_nodes[static_cast<std::size_t>(npe_) * k];
+      const double* mk = &g.matrices[static_cast<std::size_t>(npe_ * npe_) * k];
+      for (int a = 0; a < npe_; ++a)
+        for (int b = 0; b < npe_; ++b)
+          for (int c = 0; c < 3; ++c) {
+            const int32_t row = free_index_[3 * static_cast<std::size_t>(g.nodes[static_cast<std::size_t>(local[a])]) + c];
+            const int32_t col = free_index_[3 * static_cast<std::size_t>(g.nodes[static_cast<std::size_t>(local[b])]) + c];
+            if (row < 0 || col < 0) continue;
+            const int* p = std::lower_bound(ip + op[row], ip + op[row + 1], col);
+            grip_slots_.emplace_back(p - ip, mk[npe_ * a + b]);
+          }
+    }
 }
 
 void FemNewton::set_terms(FemNewtonTerms terms) {
@@ -244,6 +295,7 @@ void FemNewton::build_system() {
     if (slot[k] >= 0) contrib_[fill[slot[k]]++] = static_cast<int64_t>(k);
   diagonal_.resize(free_count);
   for (int32_t row = 0; row < free_count; ++row) diagonal_[row] = std::lower_bound(ip + op[row], ip + op[row + 1], row) - ip;
+  index_grips();
   // The linear solves: direct while the factor fits (after its analysis: the ordering says how big).
   factor_current_ = false;
   rest_factor_ = false;
@@ -284,6 +336,7 @@ int32_t FemNewton::forces(const std::vector<double>& u, double s, std::vector<do
   }
   out.resize(u.size());
   for (std::size_t d = 0; d < u.size(); ++d) out[d] = forces_[d] + s * external_[d];
+  for (const FemGrip& g : grips_) fem_grip_add_forces(m_, g, u.data(), s, out.data());
   if (terms_.mass != 0) {
     for (std::size_t d = 0; d < u.size(); ++d) out[d] -= terms_.mass * m_.node_mass[d / 3] * (u[d] - terms_.inertia_target[d]);
   }
@@ -315,6 +368,7 @@ double FemNewton::energy(const std::vector<double>& u, double s) {
   double e = cpu::fem_strain_energy(el_, u.data(), element_energy_.data(), threads_);
   if (!std::isfinite(e)) return HUGE_VAL;
   for (std::size_t d = 0; d < u.size(); ++d) e -= s * external_[d] * u[d];
+  for (const FemGrip& g : grips_) e += fem_grip_energy(m_, g, u.data(), s);
   if (terms_.mass != 0) {
     for (std::size_t d = 0; d < u.size(); ++d) {
       const double g = u[d] - terms_.inertia_target[d];
@@ -383,6 +437,7 @@ void FemNewton::gather_system(const std::vector<double>& kbuf, double scale, con
   if (terms_.mass != 0) {
     for (std::size_t k = 0; k < free_component_.size(); ++k) values[diagonal_[k]] += terms_.mass * m_.node_mass[free_component_[k] / 3];
   }
+  for (const auto& [z, v] : grip_slots_) values[z] += v;
   double sum = 0;
   for (const int64_t z : diagonal_) sum += values[z];
   mean_diagonal_ = diagonal_.empty() ? 1.0 : std::max(sum / static_cast<double>(diagonal_.size()), 1e-300);
@@ -544,6 +599,11 @@ void FemNewton::lift(const std::vector<double>& gap, Eigen::VectorXd& b, const s
       b[row] -= kg;
     }
   }
+  if (grips_.empty()) return;
+  grip_scratch_.assign(gap.size(), 0.0);
+  for (const FemGrip& g : grips_) fem_grip_add_product(m_, g, gap.data(), grip_scratch_.data());
+  for (std::size_t d = 0; d < gap.size(); ++d)
+    if (free_index_[d] >= 0) b[free_index_[d]] -= grip_scratch_[d];
 }
 
 FemNewton::LineSearch FemNewton::line_search(const std::vector<double>& u, const Eigen::VectorXd& du, const std::vector<double>& gap,

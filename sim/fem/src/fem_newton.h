@@ -2,10 +2,11 @@
 // (fem_implicit_dynamics.h): one model, a set of held components (fixed, or moved to targets: a grab),
 // and Newton iterations on
 //
-//   r(u) = f_int(u) + s f_ext - c_m M (u - y) - c_b K_n (u - u_n) = 0      on the free components
+//   r(u) = f_int(u) + s f_ext - c_m M (u - y) - c_b K_n (u - u_n) - sum_g P_g (u - s g_g) = 0
 //
-// (s the load factor; the inertia and damping terms are zero for a static solve), with the tangent
-// J = K(u) + c_m M + c_b K_n. Element tangents of the nonlinear laws are projected to positive
+// on the free components (s the load factor; the inertia and damping terms are zero for a static solve;
+// P_g, g_g: the volume grips' penalty matrices and targets, fem_grip.h), with the tangent
+// J = K(u) + c_m M + c_b K_n + sum_g P_g. Element tangents of the nonlinear laws are projected to positive
 // semi-definite (options.projection: always, or when the exact J has no Cholesky factor), so J is
 // positive definite whenever the held components remove every rigid motion, and its factor exists.
 //
@@ -23,6 +24,7 @@
 // Internal to sim/fem (no public header): the public solvers own one and check their arguments first.
 #pragma once
 
+#include "ctsurg/sim/fem/fem_grip.h"
 #include "ctsurg/sim/fem/fem_model.h"
 #include "ctsurg/sim/fem/fem_static_solver.h"
 #include "ctsurg/sim/fem/kernels/fem_forces_impl.h"
@@ -73,6 +75,10 @@ class FemNewton {
   // External forces at load factor 1: nodal forces plus the lumped weight (#N x 3 uN).
   void set_external(const std::vector<double>& external);
   void set_terms(FemNewtonTerms terms);
+  // The volume grips (fem_grip.h) at load factor 1; call before set_held (a grip holds the model as a
+  // support does). A change of their elements or matrices (a capture, a release) makes the factors new;
+  // a change of targets alone (the tool moved) does not.
+  void set_grips(const std::vector<FemGrip>& grips);
   const std::vector<uint8_t>& held() const { return held_; }
 
   // ||r|| at the held targets (free components at 0) under the full load: the scale of the relative
@@ -136,6 +142,7 @@ class FemNewton {
   // k_'s values from element matrices: scale sum(kbuf (+ cb kbuf_n)) per non-zero, + c_m M on the
   // diagonal; mean_diagonal_ of the result.
   void gather_system(const std::vector<double>& kbuf, double scale, const std::vector<double>* kbuf_n, double cb);
+  void index_grips();  // grip_slots_ from the grips and the pattern
   void build_system();
   void damping_tangent();
   std::string node_of_column(int64_t column) const;
@@ -149,6 +156,9 @@ class FemNewton {
   std::vector<uint8_t> held_;   // #N x 3
   std::vector<double> target_, external_, corner_, forces_, all_forces_, kbuf_, kbuf_n_, element_energy_, damping_kw_;
   FemNewtonTerms terms_;
+  std::vector<FemGrip> grips_;
+  std::vector<std::pair<int64_t, double>> grip_slots_;  // (non-zero of k_, value) of the grips' P on the free components
+  mutable std::vector<double> grip_scratch_;  // lift's P gap
   FemElementView<double> el_{};
   int npe_ = 4, ne_ = 12;  // nodes and unknowns per element (quadratic: 10, 30)
   // The free components' system: pattern, each non-zero's element-matrix contributions, the diagonal's

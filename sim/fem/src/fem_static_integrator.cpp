@@ -7,7 +7,10 @@
 //   - otherwise Newton (fem_static_solver.h: direct or iterative solves, the factor kept across frames),
 //     which also holds a grab that completes the supports (a roller and a grab). With quasi-Newton
 //     (options.newton.nonlinear) a frame starts from the last two frames' linear extrapolation, 2 u_k -
-//     u_{k-1}, while the grabs hold the same nodes (a drag: the tool's steady motion carried over).
+//     u_{k-1}, while the grabs hold the same nodes and the volume grips the same elements (a drag: the
+//     tool's steady motion carried over).
+// Volume grips (fem_grip.h) are loads of the Newton solve: a frame with one goes to Newton even where
+// the linear law's condensation would otherwise solve it (that holds node sets only).
 #include "ctsurg/core/error.h"
 #include "ctsurg/sim/fem/fem_engine.h"
 #include "ctsurg/sim/fem/fem_forces.h"
@@ -24,7 +27,7 @@ namespace {
 class FemStaticIntegrator final : public FemIntegrator {
  public:
   FemStaticIntegrator(const FemModel& model, const FemBoundaryConditions& supports, const FemEngineOptions& options, Backend backend)
-      : options_(options) {
+      : model_(model), options_(options) {
     if (supports.fixed_nodes.empty() && supports.fixed_components.empty()) {
       throw InputError(options.where, "fixed", "a static FEM problem needs fixed nodes (the system is singular otherwise)");
     }
@@ -69,6 +72,8 @@ class FemStaticIntegrator final : public FemIntegrator {
     } else {
       newton_solver_ = std::make_unique<FemStaticSolver>(model, newton, backend);
     }
+    newton_options_ = newton;
+    backend_ = backend;
   }
 
   bool quasi_static() const override { return true; }
@@ -82,6 +87,11 @@ class FemStaticIntegrator final : public FemIntegrator {
     FemLoads loads;
     loads.gravity = options_.gravity;
     loads.forces = holds.nodal_forces();
+    holds.update_grips(tools, time, u, true, loads.grips);
+    // The linear law's condensation holds node sets only: a grip's frames go to Newton (one step on
+    // the linear law), made when the first grip captures.
+    const bool by_newton = !local_ && (!linear_ || !loads.grips.empty());
+    if (by_newton && !newton_solver_) newton_solver_ = std::make_unique<FemStaticSolver>(model_, newton_options_, backend_);
     FemStaticResult r;
     if (local_) {
       // The region grows from every node a tool holds or loads, as far as that tool's radius (its own
@@ -95,14 +105,14 @@ class FemStaticIntegrator final : public FemIntegrator {
         seed_radii_.resize(seeds_.size(), tools[t].local_region_mm > 0 ? tools[t].local_region_mm : *options_.local_region_mm);
       }
       r = local_->solve(grab_nodes_, grab_displacements_, loads, seeds_, warm_start ? &u : nullptr, &seed_radii_);
-    } else if (linear_) {
+    } else if (!by_newton) {
       r = linear_->solve(grab_nodes_, grab_displacements_, loads);
     } else {
       bc_.prescribed_nodes = grab_nodes_;
       bc_.prescribed_displacements = grab_displacements_;
       const std::vector<double>* start = warm_start ? &u : nullptr;  // warm start from the previous frame
       const bool extrapolate = options_.newton.nonlinear == FemNonlinearSolve::quasi_newton && warm_start &&
-                               previous_u_.size() == u.size() && grab_nodes_ == previous_grab_nodes_;
+                               previous_u_.size() == u.size() && grab_nodes_ == previous_grab_nodes_ && same_grips(loads.grips);
       if (extrapolate) {
         extrapolated_.resize(u.size());
         for (size_t d = 0; d < u.size(); ++d) extrapolated_[d] = 2 * u[d] - previous_u_[d];
@@ -112,6 +122,8 @@ class FemStaticIntegrator final : public FemIntegrator {
       if (options_.newton.nonlinear == FemNonlinearSolve::quasi_newton) {
         previous_u_ = u;
         previous_grab_nodes_ = grab_nodes_;
+        previous_grip_elements_.clear();
+        for (const FemGrip& g : loads.grips) previous_grip_elements_.push_back(g.elements);
       }
     }
     if (!r.report.converged) {
@@ -120,6 +132,7 @@ class FemStaticIntegrator final : public FemIntegrator {
                          std::to_string(r.report.newton_iterations) + " Newton iterations");
     }
     u = std::move(r.displacements);
+    reactions_ = std::move(r.reactions);
     time_ = time;
     FemAdvance a;
     a.newton_iterations = r.report.newton_iterations + r.report.quasi_newton_iterations;  // the nonlinear iterations
@@ -137,19 +150,31 @@ class FemStaticIntegrator final : public FemIntegrator {
   }
   void restore(const FemCarriedState& s, const std::vector<double>&, const std::vector<double>&) override { time_ = s.time; }
   const FemLocalRegionSolver* local_region() const override { return local_.get(); }
+  const std::vector<double>* reactions() const override { return &reactions_; }
 
  private:
+  const FemModel& model_;
   FemEngineOptions options_;
   FemBoundaryConditions bc_;
   std::unique_ptr<FemLinearStaticSolver> linear_;
   std::unique_ptr<FemStaticSolver> newton_solver_;
   std::unique_ptr<FemLocalRegionSolver> local_;
+  FemStaticOptions newton_options_;
+  Backend backend_ = Backend::cpu;
+  std::vector<double> reactions_;  // the last frame's (#N x 3 uN)
   double time_ = 0;
   std::vector<int32_t> grab_nodes_;  // scratch
   std::vector<double> grab_displacements_;
   // Quasi-Newton: the frame before the last (its u and grabbed nodes), and the extrapolated start.
   std::vector<double> previous_u_, extrapolated_;
   std::vector<int32_t> previous_grab_nodes_;
+  std::vector<std::vector<int32_t>> previous_grip_elements_;  // the last frame's grips (a capture or release restarts)
+  bool same_grips(const std::vector<FemGrip>& grips) const {
+    if (grips.size() != previous_grip_elements_.size()) return false;
+    for (std::size_t g = 0; g < grips.size(); ++g)
+      if (grips[g].elements != previous_grip_elements_[g]) return false;
+    return true;
+  }
   std::vector<int32_t> seeds_;        // scratch: the tools' nodes the local region grows from
   std::vector<double> seed_radii_;    // scratch: each seed's radius (its tool's local_region_mm or the engine's), mm
 };

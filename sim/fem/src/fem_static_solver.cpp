@@ -58,6 +58,7 @@ FemStaticResult FemStaticSolver::solve(const FemBoundaryConditions& bc, const Fe
     for (int c = 0; c < 3; ++c)
       external[3 * i + c] = (loads.forces.empty() ? 0.0 : loads.forces[3 * i + c]) + model_.node_load[i] * loads.gravity[c];
   FemNewton& newton = *newton_;
+  newton.set_grips(loads.grips);  // first: a grip holds the model as a support does (set_held's check)
   newton.set_held(held, target);
   newton.set_external(external);
 

@@ -2,6 +2,7 @@
 
 #include "ctsurg/core/error.h"
 
+#include <algorithm>
 #include <cmath>
 #include <utility>
 
@@ -35,6 +36,36 @@ FemToolHolds::Hold& FemToolHolds::hold(size_t tool) {
 
 void FemToolHolds::nodes_added(const std::vector<int32_t>& parents) {
   for (const int32_t p : parents) held_axes_.push_back(held_axes_.at(static_cast<size_t>(p)));
+  // A grip's elements may now use a copy of a node it covered: its nodes again from the model's tets,
+  // a copy's capture and target its parent's.
+  const int32_t before = static_cast<int32_t>(held_axes_.size() - parents.size());
+  const size_t npe = static_cast<size_t>(model_.nodes_per_element());
+  for (Hold& h : holds_) {
+    FemGrip& g = h.grip;
+    if (g.elements.empty()) continue;
+    const FemGrip old = g;
+    g.nodes.clear();
+    for (const int32_t e : g.elements)
+      for (size_t a = 0; a < npe; ++a) g.nodes.push_back(model_.tets[npe * static_cast<size_t>(e) + a]);
+    std::sort(g.nodes.begin(), g.nodes.end());
+    g.nodes.erase(std::unique(g.nodes.begin(), g.nodes.end()), g.nodes.end());
+    g.element_nodes.clear();
+    for (const int32_t e : g.elements)
+      for (size_t a = 0; a < npe; ++a)
+        g.element_nodes.push_back(static_cast<int32_t>(
+            std::lower_bound(g.nodes.begin(), g.nodes.end(), model_.tets[npe * static_cast<size_t>(e) + a]) - g.nodes.begin()));
+    g.captured.clear();
+    g.target.clear();
+    for (const int32_t n : g.nodes) {
+      const int32_t original = n >= before ? parents[static_cast<size_t>(n - before)] : n;
+      const size_t k = static_cast<size_t>(std::lower_bound(old.nodes.begin(), old.nodes.end(), original) - old.nodes.begin());
+      if (k >= old.nodes.size() || old.nodes[k] != original) throw RuntimeError("fem tools: a grip's element gained a node after a cut");
+      for (size_t c = 0; c < 3; ++c) {
+        g.captured.push_back(old.captured[3 * k + c]);
+        g.target.push_back(old.target[3 * k + c]);
+      }
+    }
+  }
   if (!nodal_forces_.empty()) nodal_forces_.resize(3 * held_axes_.size(), 0.0);
   if (held_axes_.size() != static_cast<size_t>(model_.node_count())) {
     throw RuntimeError("fem tools: the model has " + std::to_string(model_.node_count()) + " nodes after a cut, the tools know " +
@@ -42,17 +73,20 @@ void FemToolHolds::nodes_added(const std::vector<int32_t>& parents) {
   }
 }
 
-bool FemToolHolds::engaged(size_t tool) const { return tool < holds_.size() && !holds_[tool].nodes.empty(); }
+bool FemToolHolds::engaged(size_t tool) const {
+  return tool < holds_.size() && (!holds_[tool].nodes.empty() || !holds_[tool].grip.elements.empty());
+}
 
 const std::vector<int32_t>& FemToolHolds::held_nodes(size_t tool) const {
   static const std::vector<int32_t> none;
-  return tool < holds_.size() ? holds_[tool].nodes : none;
+  if (tool >= holds_.size()) return none;
+  return holds_[tool].grip.elements.empty() ? holds_[tool].nodes : holds_[tool].grip.nodes;
 }
 
 bool FemToolHolds::captures(const std::vector<ToolInput>& tools) const {
   for (size_t i = 0; i < tools.size(); ++i) {
     if (tools[i].acts != ToolPrimitive::hold && tools[i].acts != ToolPrimitive::load) continue;
-    const bool held = i < holds_.size() && (!holds_[i].nodes.empty() || holds_[i].released);
+    const bool held = i < holds_.size() && (engaged(i) || holds_[i].released);
     if (tools[i].active && !held) return true;
   }
   return false;
@@ -64,8 +98,9 @@ void FemToolHolds::update_grabs(const std::vector<ToolInput>& tools, double t, c
   displacements.clear();
   for (size_t i = 0; i < tools.size(); ++i) {
     const ToolInput& tool = tools[i];
-    if (tool.acts != ToolPrimitive::hold) continue;
+    if (tool.acts != ToolPrimitive::hold || tool.grip != HoldGrip::nodes) continue;
     Hold& g = hold(i);
+    g.centre = tool.centre;
     if (g.nodes.empty() && !g.released && tool.active) {
       const double when = capture_at_start ? tool.start_s : t;
       const Vec3& centre = capture_at_start ? tool.start_centre : tool.centre;
@@ -108,13 +143,92 @@ void FemToolHolds::update_grabs(const std::vector<ToolInput>& tools, double t, c
   displacements.resize(3 * kept);
 }
 
+void FemToolHolds::update_grips(const std::vector<ToolInput>& tools, double t, const std::vector<double>& u, bool capture_at_start,
+                                std::vector<FemGrip>& grips) {
+  grips.clear();
+  for (size_t i = 0; i < tools.size(); ++i) {
+    const ToolInput& tool = tools[i];
+    if (tool.acts != ToolPrimitive::hold || tool.grip != HoldGrip::volume) continue;
+    Hold& g = hold(i);
+    g.centre = tool.centre;
+    if (g.grip.elements.empty() && !g.released && tool.active) {
+      const double when = capture_at_start ? tool.start_s : t;
+      const Vec3& centre = capture_at_start ? tool.start_centre : tool.centre;
+      const double edge = tool.grip_edge_mm > 0 ? tool.grip_edge_mm : tool.radius_mm / 4;
+      if (!(tool.grip_stiffness_ratio > 0) || !(edge <= tool.radius_mm)) {
+        throw InputError(where_, tool.label, "a volume grip needs grip_stiffness_ratio > 0 and grip_edge_mm in (0, radius]");
+      }
+      g.grip = fem_capture_grip(model_, u, centre, tool.radius_mm, edge, 1.0);
+      if (g.grip.elements.empty()) {
+        throw InputError(where_, tool.label, "grips no material at t = " + std::to_string(when) +
+                                                 " s; move it onto the tissue or set snap_to_tissue: true");
+      }
+      // The penalty per volume: ratio x E / r^2 of the stiffest material it holds (E from mu and lambda).
+      double e_max = 0;
+      for (const int32_t e : g.grip.elements) {
+        const LameParameters& l = model_.lame_of(e);
+        e_max = std::max(e_max, l.mu * (3 * l.lambda + 2 * l.mu) / (l.lambda + l.mu));
+      }
+      const double k = tool.grip_stiffness_ratio * e_max / (tool.radius_mm * tool.radius_mm);
+      for (double& m : g.grip.matrices) m *= k;
+      g.captured_at = centre;
+      if (note_) {
+        note_(tool.label + ": gripped " + std::to_string(g.grip.volume_mm3) + " mm^3 of tissue (" + std::to_string(g.grip.elements.size()) +
+              " elements, penalty " + std::to_string(k) + " uN/mm^4) at t = " + std::to_string(when) + " s");
+      }
+    }
+    if (!g.grip.elements.empty() && !tool.active) {
+      g.grip = FemGrip{};
+      g.released = true;
+    }
+    if (g.grip.elements.empty()) continue;
+    fem_grip_move(g.grip, {tool.centre[0] - g.captured_at[0], tool.centre[1] - g.captured_at[1], tool.centre[2] - g.captured_at[2]});
+    grips.push_back(g.grip);
+  }
+}
+
+void FemToolHolds::add_shared_force(const std::vector<int32_t>& nodes, const Vec3& force_n, std::vector<double>& out) const {
+  for (size_t a = 0; a < 3; ++a) {
+    // The component along axis a is shared by the nodes free in a (all of them unless some are held in a).
+    size_t free_in_a = 0;
+    for (const int32_t n : nodes) free_in_a += (held_axes_[static_cast<size_t>(n)] >> a) & 1u ? 0 : 1;
+    if (free_in_a == 0) continue;
+    const double share = 1e6 / static_cast<double>(free_in_a);  // N -> uN
+    for (const int32_t n : nodes)
+      if (!((held_axes_[static_cast<size_t>(n)] >> a) & 1u)) out[3 * static_cast<size_t>(n) + a] += force_n[a] * share;
+  }
+}
+
+bool FemToolHolds::load(size_t tool, const std::vector<double>& u, const std::vector<double>* reactions, std::array<double, 6>& out) const {
+  if (!engaged(tool)) return false;
+  const Hold& h = holds_[tool];
+  if (!h.grip.elements.empty()) {
+    out = fem_grip_load(model_, h.grip, u, h.centre);
+    return true;
+  }
+  // A force tool: the force it shares among its nodes (as update_forces shares it); a node grab: the
+  // reactions its held components need.
+  std::vector<double> shared;
+  if (h.force) {
+    shared.assign(u.size(), 0.0);
+    add_shared_force(h.nodes, h.force_n, shared);
+  } else if (reactions == nullptr || reactions->size() != u.size()) {
+    return false;
+  }
+  out = fem_nodal_load(model_, h.nodes, u, h.force ? shared : *reactions, h.centre);
+  return true;
+}
+
 bool FemToolHolds::update_forces(const std::vector<ToolInput>& tools, const std::vector<double>& u, bool capture_at_start) {
   bool changed = false;
   for (size_t i = 0; i < tools.size(); ++i) {
     const ToolInput& tool = tools[i];
     if (tool.acts != ToolPrimitive::load) continue;
     Hold& f = hold(i);
+    f.centre = tool.centre;
+    f.force_n = tool.force_n;
     if (f.nodes.empty() && !f.released && tool.active) {
+      f.force = true;
       f.nodes = free_nodes_in_sphere(model_, u, held_axes_, capture_at_start ? tool.start_centre : tool.centre, tool.radius_mm);
       if (f.nodes.empty()) {
         throw InputError(where_, tool.label,
@@ -135,15 +249,7 @@ bool FemToolHolds::update_forces(const std::vector<ToolInput>& tools, const std:
     if (tools[i].acts != ToolPrimitive::load || !engaged(i)) continue;
     const Hold& f = holds_[i];
     if (nodal_forces_.empty()) nodal_forces_.assign(static_cast<size_t>(3 * model_.node_count()), 0.0);
-    for (size_t a = 0; a < 3; ++a) {
-      // The component along axis a is shared by the nodes free in a (all of them unless some are held in a).
-      size_t free_in_a = 0;
-      for (const int32_t n : f.nodes) free_in_a += (held_axes_[static_cast<size_t>(n)] >> a) & 1u ? 0 : 1;
-      if (free_in_a == 0) continue;
-      const double share = 1e6 / static_cast<double>(free_in_a);  // N -> uN
-      for (const int32_t n : f.nodes)
-        if (!((held_axes_[static_cast<size_t>(n)] >> a) & 1u)) nodal_forces_[static_cast<size_t>(3 * n) + a] += tools[i].force_n[a] * share;
-    }
+    add_shared_force(f.nodes, tools[i].force_n, nodal_forces_);
   }
   return true;
 }

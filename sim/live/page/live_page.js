@@ -585,6 +585,11 @@ function showOverlay() {
   if (s) {
     parts.push(`t ${s.time_s.toFixed(3)} s`, `real time ×${s.rtf.toFixed(2)}`, `step ${(s.dt_s * 1000).toPrecision(3)} ms`,
       `server ${s.pictures_per_s.toFixed(0)}/s`);
+    // Each holding tool's pull on the tissue (N), and its moment (N mm): what a haptic device would render.
+    for (const l of s.loads ?? []) {
+      const f = Math.hypot(...l.force_n), m = Math.hypot(...l.moment_n_mm);
+      parts.push(`tool ${l.id}: ${(f * 1000).toFixed(1)} mN, ${(m * 1000).toFixed(0)} mN·mm`);
+    }
   }
   parts.push(`page ${hook.pageFps}/s`);
   const latency = hook.latencies[hook.latencies.length - 1];

@@ -186,7 +186,10 @@ json server_message_json(const LiveBegan& m) {
 json server_message_json(const LiveEnded& m) { return {{"type", "ended"}, {"id", m.id}, {"why", m.why}}; }
 
 json server_message_json(const LiveStatus& m) {
+  json loads = json::array();
+  for (const LiveToolLoad& l : m.loads) loads.push_back({{"id", l.id}, {"force_n", l.force_n}, {"moment_n_mm", l.moment_n_mm}});
   return {{"type", "status"},
+          {"loads", loads},
           {"time_s", m.time_s},
           {"steps", m.steps},
           {"dt_s", m.dt_s},

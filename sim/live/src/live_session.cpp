@@ -110,6 +110,18 @@ void LiveSession::reset() {
 // The queued events at the boundary t = engine time, whose next event ends at t1 (live_session.h).
 // Events wait while the timeline holds user keyframes or windows beyond t (after a restart with half
 // the step the loop replays from its last frame: the recording's future is already written).
+std::vector<LiveToolLoad> LiveSession::tool_loads() const {
+  std::vector<LiveToolLoad> loads;
+  const SimulationEngine& e = loop_->engine();
+  const size_t base = scenario_.tools.size();
+  for (size_t i = base; i < loop_->timeline().size(); ++i) {
+    std::array<double, 6> l{};
+    if (!e.tool_load(i, l)) continue;
+    loads.push_back({static_cast<int>(i - base), {l[0], l[1], l[2]}, {l[3], l[4], l[5]}});
+  }
+  return loads;
+}
+
 void LiveSession::apply_pending() {
   if (pending_.empty()) return;
   ToolTimeline& timeline = loop_->timeline();

@@ -163,6 +163,9 @@ void ToolTimeline::inputs(double t0, double t1, double min_sweep_mm, std::vector
     in.orientation = tool.path.rotation_at(t1);
     in.end_s = spec.end_s;
     in.local_region_mm = spec.local_region_mm;
+    in.grip = spec.grip;
+    in.grip_stiffness_ratio = spec.grip_stiffness_ratio;
+    in.grip_edge_mm = spec.grip_edge_mm;
     in.removal_rate_mm3_s = spec.removal_rate_mm3_s;
     if (spec.acts() == ToolPrimitive::stitch) {
       in.stitches = tool.stitch_points;

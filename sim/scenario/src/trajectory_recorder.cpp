@@ -39,6 +39,7 @@ TrajectoryRecorder::TrajectoryRecorder(const Scenario& s, const SimulationEngine
   if (s.write_particles) {
     traj_.rest_particles.resize(rest.size());
     for (size_t i = 0; i < rest.size(); ++i) traj_.rest_particles[i] = static_cast<float>(rest[i] + origin_[i % 3]);
+    traj_.element_nodes = engine.elements(traj_.elements);  // the FE mesh over the particles (none: 0)
   }
   metrics_ = {{"kinetic_energy", "nJ", {}},          {"elastic_energy", "nJ", {}},   {"max_displacement", "mm", {}},
               {"surface_max_displacement", "mm", {}}, {"enclosed_volume", "mm^3", {}}, {"surface_area", "mm^2", {}},
@@ -146,6 +147,11 @@ void TrajectoryRecorder::record(SimulationEngine& engine, const ToolTimeline& ti
     }
     const bool on = timeline.active(i, t) && (!sphere_shows_engagement(*tool.type) || engine.engaged(i));
     traj_.spheres.insert(traj_.spheres.end(), {c[0], c[1], c[2], on ? tool.radius_mm : 0.0});
+    std::array<double, 6> load{};
+    const bool measured = engine.tool_load(i, load);
+    loads_.push_back(measured ? 1.0 : 0.0);
+    for (const double v : load) loads_.push_back(measured ? v : 0.0);
+    any_load_ = any_load_ || measured;
   }
   for (size_t i = 0; i < timeline.size(); ++i) {
     const ToolAction& tool = timeline.tool(i);
@@ -180,6 +186,7 @@ void TrajectoryRecorder::truncate(size_t frames) {
   if (!traj_.vertex_region.empty()) traj_.vertex_region.resize(frames * static_cast<size_t>(traj_.vertex_count()));
   for (auto& m : metrics_) m.values.resize(frames);
   traj_.spheres.resize(frames * traj_.sphere_kinds.size() * 4);
+  loads_.resize(frames * traj_.sphere_kinds.size() * 7);
   traj_.blades.resize(frames * blades_ * 7);
   traj_.instrument_poses.resize(frames * traj_.instruments.size() * 8);
   traj_.stitches.resize(frames * stitches_ * 7);
@@ -212,6 +219,17 @@ void TrajectoryRecorder::add_tool(const ToolTimeline& timeline, size_t i) {
     }
   }
   data = std::move(grown);
+  if (!blade) {  // the loads of a tool not yet acting: none measured
+    const size_t spheres = traj_.sphere_kinds.size();
+    std::vector<double> loads;
+    loads.reserve(frames * (spheres + 1) * 7);
+    for (size_t f = 0; f < frames; ++f) {
+      loads.insert(loads.end(), loads_.begin() + static_cast<std::ptrdiff_t>(f * spheres * 7),
+                   loads_.begin() + static_cast<std::ptrdiff_t>((f + 1) * spheres * 7));
+      loads.insert(loads.end(), 7, 0.0);
+    }
+    loads_ = std::move(loads);
+  }
   ++tools_;
   if (blade) {
     ++blades_;
@@ -223,6 +241,7 @@ void TrajectoryRecorder::add_tool(const ToolTimeline& timeline, size_t i) {
 void TrajectoryRecorder::finish_into(Trajectory& traj, double dt) const {
   traj.dt_s = dt;
   traj.metrics = metrics_;
+  if (any_load_) traj.sphere_loads = loads_;  // only a run whose engine measured a tool's load says so
   // Only a run that closed some hole says so (older readers and runs without cuts see no dataset).
   if (std::any_of(closing_.begin(), closing_.end(), [](int64_t n) { return n > 0; })) traj.closing_triangles = closing_;
 }

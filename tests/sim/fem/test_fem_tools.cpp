@@ -152,6 +152,14 @@ TEST(FemTools, ForceIsSharedEquallyAndChangesOnlyWhenItStartsOrEnds) {
   }
   EXPECT_EQ(loaded, 5);  // the 6 face neighbours of (4, 1, 1) inside the box (5), the fixed centre left out
   EXPECT_NEAR(total, 0.5e6, 1e-6);  // N -> uN
+  // Its load on the tissue (tool_load): the force it applies, with no reactions needed, and its moment
+  // about the centre: the five loaded neighbours sit symmetrically around it but for the missing +x one,
+  // so only the -x neighbour's z force has an arm (about y).
+  std::array<double, 6> load{};
+  ASSERT_TRUE(holds.load(0, u, nullptr, load));
+  EXPECT_NEAR(load[2], 0.5, 1e-12);
+  EXPECT_NEAR(load[0], 0.0, 1e-12);
+  EXPECT_NEAR(load[4], 0.1, 1e-12);  // r = (-1, 0, 0) x f = (0, 0, 0.1): r_z f_x - r_x f_z = 0.1 N mm
   EXPECT_FALSE(holds.update_forces({f}, u, false));
   f.active = false;
   EXPECT_TRUE(holds.update_forces({f}, u, false));

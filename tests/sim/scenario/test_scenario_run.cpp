@@ -570,6 +570,58 @@ TEST(ScenarioRun, FemImplicitSettlesToTheStaticShapeAndCorotationalStaysCloseToN
   EXPECT_LT(worst_difference(st, loose), 0.5);
 }
 
+// A grab with grip: volume (fem/fem_grip.h) holds the bar's material by a penalty: the trajectory carries
+// its load on the tissue (the pull along the grab's travel), a node grab's from the static solve's
+// reactions, and the two grips move the bar alike. grip: volume on a model that cannot take it is refused
+// by field.
+TEST(ScenarioRun, AVolumeGripLoadsTheTissueAndTheTrajectoryCarriesTheLoad) {
+  TempDir dir;
+  write_bar(dir.path());
+  write_bar_tets(dir.path());
+  const std::string time = "time:\n  duration_s: 0.1\n";
+  const std::string nodes_text = fem_scenario("neo_hookean", "static", time);
+  const std::string volume_text = with(nodes_text, "      radius_mm: 4.5\n", "      radius_mm: 4.5\n      grip: volume\n");
+  const Trajectory nodes = run_scenario(parse_scenario(nodes_text, dir.path() / "s.yaml", dir.path()));
+  const Trajectory volume = run_scenario(parse_scenario(volume_text, dir.path() / "s.yaml", dir.path()));
+  for (const Trajectory* t : {&nodes, &volume}) {
+    ASSERT_EQ(t->sphere_loads.size(), static_cast<size_t>(t->frame_count()) * 7);
+    const double* last = &t->sphere_loads[static_cast<size_t>(t->frame_count() - 1) * 7];
+    EXPECT_EQ(last[0], 1.0);     // measured
+    EXPECT_GT(last[3], 0.0);     // the grab lifts along +z: the tissue is pulled up
+    // (x: the held tip cannot shorten as the lifted cantilever would, so the grab also pulls it along the bar)
+    EXPECT_EQ(t->sphere_loads[0], 0.0);  // the rest frame: nothing held yet
+  }
+  const double pull_nodes = nodes.sphere_loads[static_cast<size_t>(nodes.frame_count() - 1) * 7 + 3];
+  const double pull_volume = volume.sphere_loads[static_cast<size_t>(volume.frame_count() - 1) * 7 + 3];
+  std::printf("3 mm lift of the bar: pull %.4f N by the node grab, %.4f N by the volume grip; %.3f mm apart on the surface\n", pull_nodes,
+              pull_volume, worst_difference(nodes, volume));
+  EXPECT_GT(pull_volume, 0.3 * pull_nodes);
+  EXPECT_LT(pull_volume, 3.0 * pull_nodes);
+  EXPECT_LT(worst_difference(nodes, volume), 1.5);
+  // On quadratic tets, with the particles: the trajectory carries the 10-node tets over them (what
+  // ParaView opens as Tetrahedron_10), and the grip pulls as on linear tets, within a factor of two.
+  const Trajectory quad = run_scenario(parse_scenario(
+      with(with(volume_text, "solver: static", "solver: static\n  elements: quadratic"), "  frame_interval_s: 0.05\n",
+           "  frame_interval_s: 0.05\n  particles: true\n"),
+      dir.path() / "s.yaml", dir.path()));
+  EXPECT_EQ(quad.element_nodes, 10);
+  ASSERT_GT(quad.element_count(), 0);
+  EXPECT_EQ(quad.elements.size(), static_cast<size_t>(quad.element_count()) * 10);
+  EXPECT_EQ(*std::max_element(quad.elements.begin(), quad.elements.end()), quad.particle_count() - 1);
+  const double pull_quad = quad.sphere_loads[static_cast<size_t>(quad.frame_count() - 1) * 7 + 3];
+  EXPECT_GT(pull_quad, 0.5 * pull_volume);
+  EXPECT_LT(pull_quad, 2.0 * pull_volume);
+  // Refused: a volume grip on the explicit dynamics, and its fields on a node grab.
+  const std::string dynamic_volume = with(fem_scenario("neo_hookean", "dynamic", time), "      radius_mm: 4.5\n", "      radius_mm: 4.5\n      grip: volume\n");
+  EXPECT_THROW(parse_scenario(dynamic_volume, dir.path() / "s.yaml", dir.path()), InputError);
+  try {
+    parse_scenario(with(nodes_text, "      radius_mm: 4.5\n", "      radius_mm: 4.5\n      grip_edge_mm: 1\n"), dir.path() / "s.yaml", dir.path());
+    ADD_FAILURE() << "grip_edge_mm on a node grab was accepted";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.field(), "tools[0].grab.grip_edge_mm");
+  }
+}
+
 TEST(ScenarioRun, FixingSomeAxesHoldsOnlyThoseComponents) {
   TempDir dir;
   write_bar(dir.path());

@@ -18,6 +18,11 @@
 //   /trajectory/metrics/<name>             (F)        float64  attribute units (e.g. kinetic_energy, nJ)
 //   /trajectory/tools/spheres              (F, S, 4)  float64  centre xyz LPS mm, radius mm (0: inactive)
 //                                          attribute kinds: "grab;probe;..." (one per sphere)
+//   /trajectory/tools/sphere_loads         (F, S, 7)  float64  optional: the load each sphere tool exerts on the
+//                                          tissue (SimulationEngine::tool_load): measured 1/0, force xyz (N, LPS),
+//                                          moment xyz about the sphere's centre (N mm); the tissue pulls the tool
+//                                          with the opposite. Written when the engine measured some (files without
+//                                          it read as empty)
 //   /trajectory/tools/blades               (F, B, 7)  float64  edge end a xyz, end b xyz (LPS mm), active 1/0
 //   /trajectory/tools/instruments/<k>/vertices   (V_k, 3) float32 the instrument's mesh, its own frame, mm
 //   /trajectory/tools/instruments/<k>/triangles  (T_k, 3) uint32  (attribute name: the mesh file)
@@ -28,6 +33,10 @@
 //                                          files without it read as K = 0)
 //   /trajectory/particles/rest_positions   (P, 3)     float32  optional: the model's nodes at rest
 //   /trajectory/particles/positions        (F, P, 3)  float32  optional: the nodes at each frame
+//   /trajectory/particles/elements         (E, 4|10)  int32    optional, with the particles: an FEM model's tets
+//                                          over them (10 nodes: quadratic, VTK_QUADRATIC_TETRA's order), so
+//                                          that ParaView opens the particles as the FE mesh (XDMF Tetrahedron
+//                                          or Tetrahedron_10) with its displacement
 //
 // plus an XDMF sidecar: a temporal collection of the surface (and the particles as a point cloud),
 // with the displacement as a vector attribute (and the local region, when present, as a scalar
@@ -73,12 +82,15 @@ struct Trajectory {
   std::vector<TrajectoryMetric> metrics;
   std::vector<std::string> sphere_kinds;           // S: "grab" or "probe"
   std::vector<double> spheres;                     // F x S x 4
+  std::vector<double> sphere_loads;                // F x S x 7: measured, force N, moment N mm; or empty
   std::vector<double> blades;                      // F x B x 7
   std::vector<TrajectoryInstrument> instruments;   // I
   std::vector<double> instrument_poses;            // F x I x 8: active, w x y z, t (LPS mm)
   std::vector<double> stitches;                    // F x K x 7: end a, end b (LPS mm), placed 1/0; or empty
   std::vector<float> rest_particles;               // P x 3 or empty
   std::vector<float> particles;                    // F x P x 3 or empty
+  std::vector<int32_t> elements;                   // E x element_nodes particle ids, or empty
+  int32_t element_nodes = 0;                       // 4 or 10 with elements, else 0
 
   int64_t frame_count() const { return static_cast<int64_t>(time.size()); }
   int64_t vertex_count() const { return static_cast<int64_t>(rest_vertices.size() / 3); }
@@ -86,6 +98,7 @@ struct Trajectory {
   int64_t blade_count() const { return frame_count() ? static_cast<int64_t>(blades.size()) / (7 * frame_count()) : 0; }
   int64_t stitch_count() const { return frame_count() ? static_cast<int64_t>(stitches.size()) / (7 * frame_count()) : 0; }
   int64_t particle_count() const { return static_cast<int64_t>(rest_particles.size() / 3); }
+  int64_t element_count() const { return element_nodes > 0 ? static_cast<int64_t>(elements.size()) / element_nodes : 0; }
   // The metric called `name`, or nullptr.
   const TrajectoryMetric* metric(const std::string& name) const;
   // Frame f's vertices (V x 3) and triangles.

@@ -49,6 +49,8 @@ void parse_solver_section(const YamlField& top, Scenario& s) {
       bool acts = false;
       for (const ToolAction& a : s.tools) acts = acts || a.acts() == ToolPrimitive::hold || a.acts() == ToolPrimitive::load;
       if (!acts) r.fail("needs a grab or force tool: the region grows around the nodes the tools hold or load");
+      for (const ToolAction& a : s.tools)
+        if (a.grip == HoldGrip::volume) r.fail(a.label + " has grip: volume; the region's solve holds node sets (use grip: nodes)");
     }
   }
   // A tool's own local region radius needs the FEM local region.

@@ -61,6 +61,28 @@ void read_tool_path(const YamlField& f, ToolAction& t, bool rotations, const std
   if (f.has("snap_to_tissue")) t.snap_to_tissue = f.child("snap_to_tissue").boolean();
 }
 
+void read_grip(const YamlField& f, const Scenario& s, ToolAction& t) {
+  if (f.has("grip")) {
+    const YamlField g = f.child("grip");
+    t.grip = g.one_of({"nodes", "volume"}) == "volume" ? HoldGrip::volume : HoldGrip::nodes;
+    if (t.grip == HoldGrip::volume && (s.model != ModelKind::fem || s.fem_solver == FemSolver::dynamic)) {
+      g.fail("volume needs kind: fem with solver static_equilibrium or implicit (its penalty is stiff for the explicit dynamics; "
+             "the spring and vessel models hold particles)");
+    }
+  }
+  const bool volume = t.grip == HoldGrip::volume;
+  if (f.has("grip_stiffness_ratio")) {
+    if (!volume) f.child("grip_stiffness_ratio").fail("applies to grip: volume only");
+    t.grip_stiffness_ratio = f.child("grip_stiffness_ratio").positive();
+    if (t.grip_stiffness_ratio > 1e6) f.child("grip_stiffness_ratio").fail("must be <= 1e6 (the factor loses its digits beyond)");
+  }
+  if (f.has("grip_edge_mm")) {
+    if (!volume) f.child("grip_edge_mm").fail("applies to grip: volume only");
+    t.grip_edge_mm = f.child("grip_edge_mm").positive();
+    if (t.grip_edge_mm > t.radius_mm) f.child("grip_edge_mm").fail("must be <= radius_mm");
+  }
+}
+
 void require_fem_contact_solver(const YamlField& item, const Scenario& s, const char* tool) {
   if (s.model == ModelKind::fem && s.fem_solver != FemSolver::dynamic) {
     item.fail(std::string(tool) +

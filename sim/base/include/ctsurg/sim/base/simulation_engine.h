@@ -56,6 +56,12 @@ using Vec3 = std::array<double, 3>;
 enum class ToolPrimitive { hold, load, push_sphere, push_shape, separate, stitch, remove };
 const char* to_string(ToolPrimitive primitive);
 
+// What a hold captures: the free nodes inside its sphere, held at prescribed displacements (nodes); or
+// the material inside it, pulled to the tool by a penalty integrated over the elements, so that what it
+// holds does not depend on where the mesh's nodes happen to lie (volume: FEM static and implicit,
+// fem/fem_grip.h).
+enum class HoldGrip { nodes, volume };
+
 // One tool at the end of a step (or at a quasi-static frame's time). The fields a primitive does not
 // name are unused.
 struct ToolInput {
@@ -81,6 +87,11 @@ struct ToolInput {
   std::vector<std::string> stitch_fields;
   double stitch_target_mm = 0;                   // mm, >= 0
   double stitch_stiffness_ratio = 1;             // x the model's stiffest spring (> 0)
+  HoldGrip grip = HoldGrip::nodes;      // hold: what it captures (above)
+  double grip_stiffness_ratio = 1000;   // hold, volume: the penalty per volume, x E / radius^2 (E: the stiffest
+                                        //   material it holds), > 0
+  double grip_edge_mm = 0;              // hold, volume: the width of the band over which the grip fades at its
+                                        //   radius, mm, (0, radius]; 0: radius / 4
   double local_region_mm = 0;  // hold, load on an FEM local region (fem_local_region.h): this tool's region
                                // radius, mm; 0: the engine's
 };
@@ -127,6 +138,13 @@ class SimulationEngine {
   virtual EngineCounts counts() const = 0;
   virtual const Vec3& origin() const = 0;                         // LPS mm of the local frame's origin
   virtual const std::vector<double>& rest_positions() const = 0;  // #P x 3 mm, local (the model's own values)
+  // The model's elements over rest_positions() (FEM tets: #E x 4, or #E x 10 for quadratic ones in
+  // VTK_QUADRATIC_TETRA's node order) into ids; returns the nodes per element, 0 (ids empty) for a model
+  // without elements (springs, vessels).
+  virtual int32_t elements(std::vector<int32_t>& ids) const {
+    ids.clear();
+    return 0;
+  }
   virtual bool has_surface() const = 0;
   // Metrics beyond EngineMetrics' fixed ones: (name, units), e.g. a static solver's iterations.
   virtual std::vector<std::pair<std::string, std::string>> extra_metrics() const { return {}; }
@@ -160,6 +178,10 @@ class SimulationEngine {
   // Whether tool `tool` (an index into the tool list) holds something: a hold its capture, a load
   // the nodes it loads.
   virtual bool engaged(size_t tool) const = 0;
+  // The load tool `tool` exerts on the tissue now: the total force (N, LPS axes) and its moment about the
+  // tool's centre (N mm); the tissue pulls the tool with the opposite (what a haptic device renders).
+  // Returns false (load untouched) when the tool holds nothing or the engine does not measure it.
+  virtual bool tool_load([[maybe_unused]] size_t tool, [[maybe_unused]] std::array<double, 6>& load) const { return false; }
   // A stitch tool's stitches now (tool: an index into the tool list): each stitch's two points (mm, local
   // frame; they move with the nodes they joined). Empty before the stitches are placed, and for an
   // engine without sutures.

@@ -105,6 +105,10 @@ class FemEngine final : public SimulationEngine {
   EngineCounts counts() const override { return counts_; }
   const Vec3& origin() const override { return origin_; }
   const std::vector<double>& rest_positions() const override { return model_.nodes; }
+  int32_t elements(std::vector<int32_t>& ids) const override {
+    ids = model_.tets;
+    return model_.nodes_per_element();
+  }
   bool has_surface() const override { return !surface_.empty(); }
   std::vector<std::pair<std::string, std::string>> extra_metrics() const override;
   // Linear tets: a quarter of the mean edge (a cut is tested against every interior face); 0 for
@@ -130,6 +134,9 @@ class FemEngine final : public SimulationEngine {
   int64_t closing_triangles() const override { return surface_.fill_triangle_count(); }
   EngineMetrics metrics() const override;
   bool engaged(size_t tool) const override { return holds_.engaged(tool); }
+  // A volume grip's load from its penalty; a node grab's from the static solve's reactions (the dynamic
+  // solvers' node grabs: none measured); a force tool's the force it applies.
+  bool tool_load(size_t tool, std::array<double, 6>& load) const override { return holds_.load(tool, u_, integrator_->reactions(), load); }
   // With local_region_mm: the last frame's region, per node (#N: kFemOutsideRegion, kFemInRegion,
   // kFemRegionInterface of fem_local_region.h); nullptr without.
   const std::vector<uint8_t>* local_region() const;

@@ -48,6 +48,7 @@
 #pragma once
 
 #include "ctsurg/sim/base/backend.h"
+#include "ctsurg/sim/fem/fem_grip.h"
 #include "ctsurg/sim/fem/fem_model.h"
 #include "ctsurg/sim/fem/fem_static_solver.h"
 
@@ -98,6 +99,10 @@ class FemImplicitDynamics {
   // previous grab.
   void set_prescribed(const std::vector<int32_t>& nodes, const std::vector<double>& displacements);
   void clear_prescribed();
+  // The volume grips (fem_grip.h) at the next step's end. A grip with the same elements as the last
+  // step's moves from its last target to this one over the step (sub-steps in equal parts; the midpoint
+  // scheme pulls w to the targets' mean over the step); a new one starts at its target.
+  void set_grips(std::vector<FemGrip> grips);
   // External nodal forces, #N x 3 uN (empty = none).
   void set_external_forces(const std::vector<double>& forces);
 
@@ -126,6 +131,8 @@ class FemImplicitDynamics {
   std::vector<uint8_t> fixed_;                 // #N x 3 components held at 0
   std::vector<int32_t> prescribed_nodes_;
   std::vector<double> prescribed_;             // #G x 3
+  std::vector<FemGrip> grips_;                 // at the step's end (set_grips)
+  std::vector<std::vector<double>> grip_start_;  // each grip's target at the step's start
   std::vector<double> external_;               // #N x 3 forces + weight
   std::vector<double> forces_;                 // #N x 3 (set_external_forces)
   std::vector<double> u_, v_;

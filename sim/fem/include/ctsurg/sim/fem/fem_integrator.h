@@ -88,6 +88,9 @@ class FemIntegrator {
   // The contact of the explicit dynamics, and the local region of the static sequence; nullptr otherwise.
   virtual const FemContact* contact() const { return nullptr; }
   virtual const FemLocalRegionSolver* local_region() const { return nullptr; }
+  // The static sequence's last reactions (#N x 3 uN: what its held components needed, 0 elsewhere);
+  // nullptr for the dynamics.
+  virtual const std::vector<double>* reactions() const { return nullptr; }
 };
 
 // The integrator options.solver names (dynamic: explicit, implicit, static_equilibrium: static) over

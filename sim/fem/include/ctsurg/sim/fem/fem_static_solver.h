@@ -35,6 +35,7 @@
 #pragma once
 
 #include "ctsurg/sim/base/backend.h"
+#include "ctsurg/sim/fem/fem_grip.h"
 #include "ctsurg/sim/fem/fem_model.h"
 
 #include <array>
@@ -54,6 +55,10 @@ struct FemBoundaryConditions {
 struct FemLoads {
   std::vector<double> forces;                     // #N x 3 uN external nodal forces, or empty (none)
   std::array<double, 3> gravity{0, 0, 0};         // mm/s^2, applied as lumped body force m_i g
+  // Volume grips (fem_grip.h): penalties that pull the material inside each tool to its target (scaled
+  // by the load factor as the held targets are). A grip holds the model as a support does, so a problem
+  // whose supports and grips together remove every rigid motion is definite.
+  std::vector<FemGrip> grips;
 };
 
 enum class FemPreconditioner { diagonal, incomplete_cholesky };

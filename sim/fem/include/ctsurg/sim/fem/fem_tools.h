@@ -9,6 +9,9 @@
 //          FemBoundaryConditions, the explicit dynamics' set_prescribed) at that displacement plus the
 //          tool's travel since the capture, until it stops being active. A node two grabs hold follows
 //          the later one in tool order.
+//   grab with grip: volume (ToolInput::grip) holds the material inside its sphere instead, by a penalty
+//          integrated over the elements (fem_grip.h), captured as a node grab is and moved by the tool's
+//          travel since; static and implicit solvers take it as a load (FemLoads::grips).
 //   force  a total force (N) shared equally by the free nodes inside its sphere when it starts, as
 //          nodal forces (uN) until it ends (the FEM paper's point load, Huang et al. section 5).
 //
@@ -20,6 +23,7 @@
 #pragma once
 
 #include "ctsurg/sim/base/simulation_engine.h"
+#include "ctsurg/sim/fem/fem_grip.h"
 #include "ctsurg/sim/fem/fem_model.h"
 
 #include <cstdint>
@@ -51,6 +55,15 @@ class FemToolHolds {
   // once) and their displacements (#G x 3 mm). u: the nodes' displacement now (#N x 3 mm).
   void update_grabs(const std::vector<ToolInput>& tools, double t, const std::vector<double>& u, bool capture_at_start,
                     std::vector<int32_t>& nodes, std::vector<double>& displacements);
+  // The volume grips at time t (the grab entries with grip: volume): captures and releases as
+  // update_grabs, then writes the engaged grips, their targets moved with their tools, in tool order.
+  void update_grips(const std::vector<ToolInput>& tools, double t, const std::vector<double>& u, bool capture_at_start,
+                    std::vector<FemGrip>& grips);
+  // The load tool `tool` exerts on the tissue (force N, moment about its centre N mm): a volume grip's
+  // from its penalty at u (#N x 3 mm); a node grab's the sum of `reactions` (#N x 3 uN, the solver's:
+  // what the held components need) over its nodes; a force tool's the force it shares among its nodes.
+  // False when it holds nothing, or (a node grab) no reactions are given.
+  bool load(size_t tool, const std::vector<double>& u, const std::vector<double>* reactions, std::array<double, 6>& out) const;
   // The forces from the force entries of `tools`: captures and releases as the grabs.
   // Returns whether the nodal forces changed (a force started or ended).
   bool update_forces(const std::vector<ToolInput>& tools, const std::vector<double>& u, bool capture_at_start);
@@ -72,10 +85,16 @@ class FemToolHolds {
     std::vector<int32_t> nodes;     // captured (increasing); empty before the capture and after release
     std::vector<double> captured_u; // #nodes x 3 mm: their displacement at the capture
     Vec3 captured_at{0, 0, 0};      // the tool's centre at the capture
+    Vec3 centre{0, 0, 0};           // the tool's centre at the last update
     bool released = false;
+    FemGrip grip;                   // a volume grip's (its elements empty before the capture and after release)
+    bool force = false;             // a force tool's hold (its nodes are loaded, not held)
+    Vec3 force_n{0, 0, 0};          // a force tool's total force, N
   };
   Hold& hold(size_t tool);
   std::vector<int32_t> capture(const ToolInput& tool, const Vec3& centre, const std::vector<double>& u) const;
+  // out (#N x 3 uN) += force_n (N) shared equally, axis by axis, by the nodes free in that axis.
+  void add_shared_force(const std::vector<int32_t>& nodes, const Vec3& force_n, std::vector<double>& out) const;
 
   const FemModel& model_;
   std::vector<uint8_t> held_axes_;

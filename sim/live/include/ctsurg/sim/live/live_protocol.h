@@ -32,7 +32,10 @@
 //   {"type": "began", "id": n, "seq"}                     (a begin applied: the tool's id)
 //   {"type": "ended", "id": n, "why": text}               (a tool the server let go: reset, stop)
 //   {"type": "status", "time_s", "steps", "dt_s", "rtf", "pictures_per_s", "paused", "stopped": text,
-//    "halvings", "frames_recorded", "frame_bytes"}        (about four times a second)
+//    "halvings", "frames_recorded", "frame_bytes",
+//    "loads": [{"id", "force_n": [3], "moment_n_mm": [3]}]}   (about four times a second; loads: each user
+//                                                         tool whose load on the tissue the engine measures,
+//                                                         SimulationEngine::tool_load)
 //   {"type": "guard", "action": "halved" | "stopped", "message": text}
 //   {"type": "error", "message": text, "seq"}             (a message refused)
 //   {"type": "saved", "scenario", "trajectory", "frames", "time_s", "seq"}
@@ -140,6 +143,11 @@ struct LiveEnded {
   int id = 0;
   std::string why;
 };
+struct LiveToolLoad {
+  int id = 0;                              // the user tool's id
+  std::array<double, 3> force_n{};         // on the tissue, N (LPS)
+  std::array<double, 3> moment_n_mm{};     // about the tool's centre, N mm
+};
 struct LiveStatus {
   double time_s = 0;                       // simulated
   int64_t steps = 0;
@@ -151,6 +159,7 @@ struct LiveStatus {
   int halvings = 0;                        // step halvings so far
   int64_t frames_recorded = 0;
   size_t frame_bytes = 0;                  // the last frame's size
+  std::vector<LiveToolLoad> loads;         // the user tools' measured loads now
 };
 struct LiveGuard {
   enum class Action { halved, stopped };   // the step was halved (the session goes on) | the session stopped

@@ -118,6 +118,8 @@ class LiveSession {
   const std::string& restart_message() const { return restart_message_; }  // the last halving's guard message
   const std::string& stopped_message() const { return stopped_message_; }  // empty while running
   const SimulationEngine& engine() const;
+  // The loads the user's tools exert on the tissue now (those the engine measures: SimulationEngine::tool_load).
+  std::vector<LiveToolLoad> tool_loads() const;
   const Scenario& scenario() const { return scenario_; }
 
   // The surface now: vertices (#V x 3 LPS mm, float as the trajectory stores them), triangles

@@ -90,6 +90,12 @@ struct ToolAction {
   double stitch_stiffness_ratio = 1;
   // grab, clamp, force with solver.local_region: this tool's region radius (mm, > 0); 0: the solver's.
   double local_region_mm = 0;
+  // grab, clamp: grip nodes (the free nodes inside, held) | volume (the material inside, by a penalty
+  // integrated over the elements: kind fem, solver static_equilibrium or implicit; fem/fem_grip.h), its
+  // stiffness ratio (x E / radius^2, > 0) and edge band (mm, (0, radius]; 0: radius / 4).
+  HoldGrip grip = HoldGrip::nodes;
+  double grip_stiffness_ratio = 1000;
+  double grip_edge_mm = 0;
   // cautery: the most tissue it removes per second (mm^3/s, > 0).
   double removal_rate_mm3_s = 0;
 

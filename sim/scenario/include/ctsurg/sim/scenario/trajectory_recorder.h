@@ -2,7 +2,8 @@
 // surface's vertices (or the nodes' when the scenario has no surface) and its topology when a cut
 // changed it (and how many of its last triangles close the cut's holes), optionally every node's position, the tools (spheres: centre and radius, 0 when not
 // acting; blades: the edge's ends and whether it is active; instruments: their meshes once and their
-// poses per frame; stitches: their two points and whether they are placed), the engine's local region
+// poses per frame; stitches: their two points and whether they are placed; the sphere tools' loads on
+// the tissue when the engine measures them: SimulationEngine::tool_load), the engine's local region
 // per surface vertex when it has one (SimulationEngine::surface_vertex_region: frames before it had one
 // read 0), and the metrics:
 //
@@ -62,6 +63,8 @@ class TrajectoryRecorder {
   size_t stitches_ = 0;             // the sutures' stitches
   std::vector<int64_t> closing_;    // per topology: its last triangles closing cut holes
   std::vector<TrajectoryMetric> metrics_;
+  std::vector<double> loads_;       // F x S x 7: each sphere tool's load (SimulationEngine::tool_load)
+  bool any_load_ = false;           // some load was measured: the trajectory carries them
   std::vector<float> vertices_;    // scratch: the frame's vertices, local frame
   std::vector<uint8_t> region_;    // scratch: the frame's local-region flags
   std::vector<double> positions_;  // scratch: the nodes' positions, local frame
