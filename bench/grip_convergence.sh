@@ -30,8 +30,8 @@ IN=$(realpath "$IN")
 [[ -f $IN/heart/ct.h5 ]] || "$BIN/ctsurg-import" -q data_samples/heart/heart_ct.nii.gz "$IN/heart/ct.h5"
 # One grid (its full-resolution mask is what every level meshes) and one surface; each level's tets
 # approximate the mask's boundary to FACET_MM whatever their size, so that the domain is the same to
-# that distance at every level (the default, a quarter of the cell size, would move the boundary by
-# 0.9-1.8 mm between levels and measure that instead of the discretisation).
+# that distance at every level (the default, half the grid's voxel, would let the boundary move by up to
+# 1.8-3.6 mm between time_vs_error.sh's levels and measure that instead of the discretisation).
 FACET_MM=${FACET_MM:-0.5}
 G=$IN/heart_fixed_geometry
 mkdir -p "$G"

@@ -218,7 +218,7 @@ void fem_grip_move(FemGrip& grip, const std::array<double, 3>& travel) {
 
 namespace {
 
-// For each element of the grip: z = P_e (u - s g) on its nodes, handed to `use(node, axis, value)`.
+// For each element of the grip: z = P_e (u - s g) on its nodes, handed to `use(node, axis, z, (u - s g) there)`.
 template <class Use>
 void for_grip_products(const FemModel& model, const FemGrip& grip, const double* u, double s, Use use) {
   const int npe = model.nodes_per_element();
@@ -253,18 +253,8 @@ double fem_grip_energy(const FemModel& model, const FemGrip& grip, const double*
 }
 
 void fem_grip_add_product(const FemModel& model, const FemGrip& grip, const double* v, double* out) {
-  const int npe = model.nodes_per_element();
-  for (std::size_t k = 0; k < grip.elements.size(); ++k) {
-    const int32_t* local = &grip.element_nodes[static_cast<std::size_t>(npe) * k];
-    const double* m = &grip.matrices[static_cast<std::size_t>(npe * npe) * k];
-    for (int a = 0; a < npe; ++a) {
-      const std::size_t na = static_cast<std::size_t>(grip.nodes[static_cast<std::size_t>(local[a])]);
-      for (int b = 0; b < npe; ++b) {
-        const std::size_t nb = static_cast<std::size_t>(grip.nodes[static_cast<std::size_t>(local[b])]);
-        for (int c = 0; c < 3; ++c) out[3 * na + c] += m[npe * a + b] * v[3 * nb + c];
-      }
-    }
-  }
+  // P v is P (v - s g) at s = 0.
+  for_grip_products(model, grip, v, 0.0, [&](int32_t n, int c, double z, double) { out[3 * static_cast<std::size_t>(n) + c] += z; });
 }
 
 std::array<double, 6> fem_grip_load(const FemModel& model, const FemGrip& grip, const std::vector<double>& u,

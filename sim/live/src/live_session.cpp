@@ -107,9 +107,6 @@ void LiveSession::reset() {
   build({}, 1);
 }
 
-// The queued events at the boundary t = engine time, whose next event ends at t1 (live_session.h).
-// Events wait while the timeline holds user keyframes or windows beyond t (after a restart with half
-// the step the loop replays from its last frame: the recording's future is already written).
 std::vector<LiveToolLoad> LiveSession::tool_loads() const {
   std::vector<LiveToolLoad> loads;
   const SimulationEngine& e = loop_->engine();
@@ -122,6 +119,9 @@ std::vector<LiveToolLoad> LiveSession::tool_loads() const {
   return loads;
 }
 
+// The queued events at the boundary t = engine time, whose next event ends at t1 (live_session.h).
+// Events wait while the timeline holds user keyframes or windows beyond t (after a restart with half
+// the step the loop replays from its last frame: the recording's future is already written).
 void LiveSession::apply_pending() {
   if (pending_.empty()) return;
   ToolTimeline& timeline = loop_->timeline();

@@ -203,8 +203,9 @@ void TrajectoryRecorder::add_tool(const ToolTimeline& timeline, size_t i) {
   }
   const size_t frames = traj_.time.size(), width = blade ? 7 : 4, tools = blade ? blades_ : traj_.sphere_kinds.size();
   std::vector<double>& data = blade ? traj_.blades : traj_.spheres;
-  std::vector<double> grown;
+  std::vector<double> grown, loads;  // loads: a sphere's rows of loads_ (7 each), none measured before it acts
   grown.reserve(frames * (tools + 1) * width);
+  if (!blade) loads.reserve(frames * (tools + 1) * 7);
   for (size_t f = 0; f < frames; ++f) {
     const double t = traj_.time[f];
     if (timeline.active(i, t)) throw RuntimeError("trajectory recorder: " + tool.label + " was added after it started");
@@ -216,20 +217,13 @@ void TrajectoryRecorder::add_tool(const ToolTimeline& timeline, size_t i) {
       grown.insert(grown.end(), {c[0] - e[0] / 2, c[1] - e[1] / 2, c[2] - e[2] / 2, c[0] + e[0] / 2, c[1] + e[1] / 2, c[2] + e[2] / 2, 0.0});
     } else {
       grown.insert(grown.end(), {c[0], c[1], c[2], 0.0});
+      loads.insert(loads.end(), loads_.begin() + static_cast<std::ptrdiff_t>(f * tools * 7),
+                   loads_.begin() + static_cast<std::ptrdiff_t>((f + 1) * tools * 7));
+      loads.insert(loads.end(), 7, 0.0);
     }
   }
   data = std::move(grown);
-  if (!blade) {  // the loads of a tool not yet acting: none measured
-    const size_t spheres = traj_.sphere_kinds.size();
-    std::vector<double> loads;
-    loads.reserve(frames * (spheres + 1) * 7);
-    for (size_t f = 0; f < frames; ++f) {
-      loads.insert(loads.end(), loads_.begin() + static_cast<std::ptrdiff_t>(f * spheres * 7),
-                   loads_.begin() + static_cast<std::ptrdiff_t>((f + 1) * spheres * 7));
-      loads.insert(loads.end(), 7, 0.0);
-    }
-    loads_ = std::move(loads);
-  }
+  if (!blade) loads_ = std::move(loads);
   ++tools_;
   if (blade) {
     ++blades_;

@@ -1,7 +1,7 @@
 // Tests of the volume grip (fem_grip.h): its integral is the weighted volume of the sphere on any mesh and
 // moves continuously with the sphere; the reaction force and the field converge as the mesh is refined;
 // the grip's force balances the supports' reactions; quasi-Newton reaches Newton's solution with a grip;
-// bad arguments are refused by name.
+// implicit midpoint steps follow a moving grip; bad arguments are refused by name.
 #include "ctsurg/sim/fem/fem_grip.h"
 
 #include "ctsurg/core/error.h"
@@ -156,7 +156,7 @@ TEST(FemGrip, QuasiNewtonReachesNewtonsSolutionWithAGrip) {
   EXPECT_NEAR(qn.load[0], newton.load[0], 1e-3 * std::abs(newton.load[0]));
 }
 
-TEST(FemGrip, ImplicitStepsFollowAGripAndKeepEnergyBounded) {
+TEST(FemGrip, ImplicitMidpointStepsFollowAMovingGrip) {
   // The column's implicit dynamics under a grip that moves 2 mm over 0.1 s, then holds: the grip holds
   // the material near its target, nothing goes non-finite.
   const FemModel m = fem_box_model(FemLaw::neo_hookean, {2, 2, 6}, {10, 10, 30});

@@ -74,7 +74,7 @@ void read_grip(const YamlField& f, const Scenario& s, ToolAction& t) {
   if (f.has("grip_stiffness_ratio")) {
     if (!volume) f.child("grip_stiffness_ratio").fail("applies to grip: volume only");
     t.grip_stiffness_ratio = f.child("grip_stiffness_ratio").positive();
-    if (t.grip_stiffness_ratio > 1e6) f.child("grip_stiffness_ratio").fail("must be <= 1e6 (the factor loses its digits beyond)");
+    if (t.grip_stiffness_ratio > 1e6) f.child("grip_stiffness_ratio").fail("must be <= 1e6 (beyond it the penalty, not the tissue, sets the factor's conditioning)");
   }
   if (f.has("grip_edge_mm")) {
     if (!volume) f.child("grip_edge_mm").fail("applies to grip: volume only");
