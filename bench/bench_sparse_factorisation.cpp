@@ -5,19 +5,23 @@
 // the bottom face fixed). Each iteration is one numeric factorisation (the analysis is done once,
 // outside the loop, as FemNewton does per held set); counters: analysis ms, one solve (forward and
 // back substitution) ms, the factor's non-zeros where the solver reports them. CHOLMOD's BLAS is the
-// system's (OpenBLAS), one thread here.
+// system's (OpenBLAS), one thread here. BM_SparseCholeskySolve (below): the substitutions alone, double
+// against ctsurg's single-precision form.
 #include "ctsurg/sim/fem/fem_box_mesh.h"
 #include "ctsurg/sim/fem/fem_forces.h"
 #include "ctsurg/sim/fem/fem_model.h"
 
 #include "fem_bench_models.h"
+#include "sparse_cholesky.h"
 
 #include <Eigen/CholmodSupport>
 #include <Eigen/SparseCholesky>
 #include <benchmark/benchmark.h>
 #include <dlfcn.h>
 
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <map>
 #include <memory>
 #include <vector>
@@ -96,6 +100,54 @@ BENCHMARK(BM_EigenSimplicialLLT)->Arg(9)->Arg(16)->Arg(24)->Unit(benchmark::kMil
 BENCHMARK(BM_EigenSimplicialLDLT)->Arg(9)->Arg(16)->Arg(24)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_CholmodSupernodalLLT)->Arg(9)->Arg(16)->Arg(24)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_CholmodSimplicialLLT)->Arg(9)->Arg(16)->Arg(24)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+// The substitutions alone (issue 32): one solve with ctsurg's SparseCholesky (sim/fem/src/sparse_cholesky.h)
+// of the cube's K, range(1): 0 CHOLMOD's double-precision solve, 1 the single-precision form (its blocks
+// [L_kk; L_bk] L_kk^-1: one matrix-vector product per supernode and substitution, two subtrees of the
+// elimination tree at once), range(2) threads for it. What the quasi-Newton iteration pays per iteration
+// for H_0 (fem_quasi_newton.cpp). Counters: the factor's MB (double), the single form's relative
+// difference from the double solve.
+void BM_SparseCholeskySolve(benchmark::State& state) {
+  one_blas_thread();
+  const SpMat& K = stiffness(static_cast<int>(state.range(0)));
+  const bool single = state.range(1) == 1;
+  const int threads = static_cast<int>(state.range(2));
+  // Both triangles as compressed columns (= rows: K is symmetric), sorted, as FemNewton gives them.
+  SpMat a = K;
+  a.makeCompressed();
+  ctsurg::sim::SparseCholesky chol("bench");
+  chol.analyze(static_cast<int32_t>(a.rows()), a.outerIndexPtr(), a.innerIndexPtr());
+  if (chol.factorize(a.valuePtr()) >= 0) {
+    state.SkipWithError("not positive definite");
+    return;
+  }
+  chol.make_single();
+  std::vector<double> b(static_cast<size_t>(a.rows())), x(b.size()), x_double(b.size());
+  for (size_t i = 0; i < b.size(); ++i) b[i] = std::cos(0.1 * static_cast<double>(i));
+  for (auto _ : state) {
+    if (single) {
+      chol.solve_single(b.data(), x.data(), threads);
+    } else {
+      chol.solve(b.data(), x.data());
+    }
+    benchmark::DoNotOptimize(x.data());
+  }
+  chol.solve(b.data(), x_double.data());
+  chol.solve_single(b.data(), x.data(), threads);
+  double diff = 0, size = 0;
+  for (size_t i = 0; i < x.size(); ++i) {
+    diff = std::max(diff, std::abs(x[i] - x_double[i]));
+    size = std::max(size, std::abs(x_double[i]));
+  }
+  state.counters["unknowns"] = static_cast<double>(a.rows());
+  state.counters["factor_mb"] = static_cast<double>(chol.factor_bytes()) / 1048576.0;
+  state.counters["single_rel_diff"] = diff / size;
+}
+BENCHMARK(BM_SparseCholeskySolve)
+    ->ArgsProduct({{9, 16, 24}, {0}, {1}})
+    ->ArgsProduct({{9, 16, 24}, {1}, {1, 2}})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 
 }  // namespace
 

@@ -372,7 +372,14 @@ std::vector<std::pair<std::string, std::string>> FemEngine::extra_metrics() cons
     names.emplace_back("contact_penetration", "mm");
     for (int32_t b = 0; b < std::min(bodies_, kMaxBodyMetrics); ++b) names.emplace_back("body_volume_" + std::to_string(b), "mm^3");
   }
+  // A quasi-Newton frame's estimate of its distance from the converged solution (fem_static_solver.h,
+  // FemStaticReport::error_estimate_mm): what the live page shows per frame.
+  if (reports_solver_error()) names.emplace_back("solver_error_mm", "mm");
   return names;
+}
+
+bool FemEngine::reports_solver_error() const {
+  return integrator_->quasi_static() && !integrator_->local_region() && options_.newton.nonlinear == FemNonlinearSolve::quasi_newton;
 }
 
 double FemEngine::dt() const { return integrator_->dt(); }
@@ -451,6 +458,7 @@ void FemEngine::equilibrium(const std::vector<ToolInput>& tools, double time) {
   const FemAdvance a = integrator_->equilibrium(holds_, tools, time, solves_ > 0, u_);  // warm start from the previous frame
   newton_ = a.newton_iterations;
   cg_ = a.cg_iterations;
+  solver_error_mm_ = a.solver_error_mm;
   steps_ += a.newton_iterations;
   ++solves_;
 }
@@ -562,6 +570,9 @@ EngineMetrics FemEngine::metrics() const {
     m.extra.push_back(contact ? contact->deepest_penetration(model_, u.data()) : 0.0);
     m.extra.insert(m.extra.end(), body_volume.begin(), body_volume.end());
   }
+  // Where no quasi-Newton estimate exists (the rest frame before any solve, a frame that went on with
+  // Newton, the linear law's condensation): the budget tolerance_mm instead (0 with the relative rule).
+  if (reports_solver_error()) m.extra.push_back(std::isfinite(solver_error_mm_) ? solver_error_mm_ : std::max(0.0, options_.newton.tolerance_mm));
   m.springs_cut = faces_cut_;  // the FEM's cuts: faces separated
   m.triangles_removed = triangles_removed_;
   return m;

@@ -608,10 +608,12 @@ void FemNewton::lift(const std::vector<double>& gap, Eigen::VectorXd& b, const s
 
 FemNewton::LineSearch FemNewton::line_search(const std::vector<double>& u, const Eigen::VectorXd& du, const std::vector<double>& gap,
                                              bool lifting, double s, double bar, double slope, bool accept_any, bool accept_full,
-                                             std::vector<double>& trial, Eigen::VectorXd& r_trial) {
+                                             bool secant, std::vector<double>& trial, Eigen::VectorXd& r_trial) {
   LineSearch ls;
   double e0 = NAN;
-  for (int k = 0; k <= o_.max_line_search; ++k, ls.alpha *= 0.5) {
+  double next_alpha = 0.5;
+  for (int k = 0; k <= o_.max_line_search; ++k, ls.alpha = next_alpha) {
+    next_alpha = 0.5 * ls.alpha;
     trial = u;
     for (std::size_t c = 0; c < free_component_.size(); ++c) trial[free_component_[c]] += ls.alpha * du[static_cast<Eigen::Index>(c)];
     if (lifting) {
@@ -623,6 +625,10 @@ FemNewton::LineSearch FemNewton::line_search(const std::vector<double>& u, const
     if (lifting || r_trial.norm() < bar || accept_any || (accept_full && ls.alpha == 1)) {
       ls.accepted = true;
       return ls;
+    }
+    if (secant && slope > 0 && !lifting) {
+      const double rising = -r_trial.dot(du);  // dE/dalpha at the trial: past the minimum along du when > 0
+      if (rising > 0) next_alpha = ls.alpha * std::clamp(slope / (slope + rising), 0.1, 0.5);
     }
     if (slope > 0 && has_potential()) {  // a descent direction of the potential: Armijo's sufficient decrease
       if (std::isnan(e0)) e0 = energy(u, s);
@@ -649,6 +655,7 @@ bool FemNewton::newton(std::vector<double>& u, double s, FemStaticReport& rep, s
   if (o_.nonlinear == FemNonlinearSolve::quasi_newton && direct_ && !free_component_.empty() && has_potential()) {
     if (quasi_newton(u, s, rep, failure)) return true;
     ++rep.quasi_newton_fallbacks;
+    rep.error_estimate_mm = NAN;  // Newton's own (quadratic near the end) is not estimated
   }
   // Left out for quasi-Newton with the millimetre rule (needs_reference): Newton's forcing term needs it.
   if (std::isnan(rep.reference_residual)) rep.reference_residual = reference_residual();
@@ -720,7 +727,7 @@ bool FemNewton::newton_iterations(std::vector<double>& u, double s, FemStaticRep
     // rule: below the largest of the last three residuals (Grippo, Lampariello and Lucidi 1986).
     const double bar = has_potential() ? rnorm : std::max(rnorm, recent_max(rep.residual_history, 3));
     const LineSearch ls = line_search(u, du, gap, lifting, s, bar, slope, linear, in_mm && du.lpNorm<Eigen::Infinity>() <= o_.tolerance_mm,
-                                      trial, r_trial);
+                                      false, trial, r_trial);
     const double alpha = ls.alpha;
     const bool accepted = ls.accepted;
     const int32_t inverted = ls.inverted;

@@ -137,6 +137,7 @@ class FemStaticIntegrator final : public FemIntegrator {
     FemAdvance a;
     a.newton_iterations = r.report.newton_iterations + r.report.quasi_newton_iterations;  // the nonlinear iterations
     a.cg_iterations = std::accumulate(r.report.cg_iterations.begin(), r.report.cg_iterations.end(), 0);
+    a.solver_error_mm = r.report.error_estimate_mm;
     return a;
   }
 

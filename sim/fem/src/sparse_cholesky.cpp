@@ -7,20 +7,38 @@
 #include <cholmod.h>
 #include <dlfcn.h>
 
+#include <algorithm>
+#include <array>
 #include <chrono>
 #include <cstring>
 #include <vector>
 
-// The BLAS's single-precision matrix-vector product and triangular solve (Fortran interface: every
-// BLAS has it; the same library CHOLMOD's double-precision substitutions run on).
+// The BLAS's single-precision matrix-vector product and double-precision triangular solve with many
+// right-hand sides (Fortran interface: every BLAS has them; the same library CHOLMOD's double-precision
+// substitutions run on).
 extern "C" {
 void sgemv_(const char* trans, const int* m, const int* n, const float* alpha, const float* a, const int* lda, const float* x,
             const int* incx, const float* beta, float* y, const int* incy);
-void strsv_(const char* uplo, const char* trans, const char* diag, const int* n, const float* a, const int* lda, float* x,
-            const int* incx);
+void dtrsm_(const char* side, const char* uplo, const char* transa, const char* diag, const int* m, const int* n,
+            const double* alpha, const double* a, const int* lda, double* b, const int* ldb);
 }
 
 namespace ctsurg::sim {
+
+// The single-precision substitutions run on this many disjoint subtrees of the supernodal elimination
+// tree at once, then on the supernodes above them (the top) in order. Fixed, not the thread count: the
+// groups' updates of the top's rows are summed in group order, so the bits are the same on any machine
+// (one thread runs the groups one after the other).
+constexpr int kSubstitutionGroups = 2;
+
+struct SubstitutionSchedule {
+  std::vector<int32_t> groups[kSubstitutionGroups];  // each group's supernodes, ascending (children first)
+  std::vector<int32_t> top;                          // the other supernodes, ascending
+  std::vector<int32_t> top_rows;                     // the top's columns (rows the groups update)
+  std::vector<int8_t> owner;                         // per column: its supernode's group, or -1 (the top)
+  size_t max_rows = 0;                               // the most rows of a supernode (the steps' scratch)
+};
+
 namespace {
 
 using Clock = std::chrono::steady_clock;
@@ -38,6 +56,85 @@ void set_blas_threads(int threads) {
   if (set != nullptr) set(threads);
 }
 
+// Splits the supernodal elimination tree (parent: the supernode of each supernode's first row below its
+// own columns; none for a root) into kSubstitutionGroups sets of whole subtrees of about equal work
+// (a supernode's work: its block's entries) and the top: the heaviest subtree of the candidates is
+// replaced by its children (it joins the top) until the candidates pack into the groups within 5 % of
+// each other, or the top holds a quarter of the work (then the split stays as it is).
+SubstitutionSchedule substitution_schedule(const cholmod_factor& f) {
+  const auto nsuper = static_cast<int32_t>(f.nsuper);
+  const auto* super = static_cast<const int32_t*>(f.super);
+  const auto* pi = static_cast<const int32_t*>(f.pi);
+  const auto* rows = static_cast<const int32_t*>(f.s);
+  std::vector<int32_t> super_of(f.n);
+  for (int32_t k = 0; k < nsuper; ++k)
+    for (int32_t c = super[k]; c < super[k + 1]; ++c) super_of[static_cast<size_t>(c)] = k;
+  std::vector<int32_t> parent(static_cast<size_t>(nsuper), -1);
+  std::vector<int64_t> work(static_cast<size_t>(nsuper));  // the subtree's entries
+  std::vector<std::vector<int32_t>> children(static_cast<size_t>(nsuper));
+  std::vector<int32_t> candidates;
+  int64_t total = 0;
+  for (int32_t k = 0; k < nsuper; ++k) {  // children before parents (k < parent)
+    const int32_t ncols = super[k + 1] - super[k], nrows = pi[k + 1] - pi[k];
+    work[static_cast<size_t>(k)] += static_cast<int64_t>(ncols) * nrows;
+    total += static_cast<int64_t>(ncols) * nrows;
+    if (nrows > ncols) {
+      const int32_t p = super_of[static_cast<size_t>(rows[pi[k] + ncols])];
+      parent[static_cast<size_t>(k)] = p;
+      work[static_cast<size_t>(p)] += work[static_cast<size_t>(k)];
+      children[static_cast<size_t>(p)].push_back(k);
+    } else {
+      candidates.push_back(k);
+    }
+  }
+  std::vector<uint8_t> in_top(static_cast<size_t>(nsuper), 0);
+  int64_t top_work = 0;
+  std::vector<int32_t> assignment;  // per candidate: its group
+  for (;;) {
+    // Greedy packing, heaviest first (ties by supernode): each to the lightest group.
+    std::vector<int32_t> order = candidates;
+    std::sort(order.begin(), order.end(), [&](int32_t a, int32_t b) {
+      return work[static_cast<size_t>(a)] != work[static_cast<size_t>(b)] ? work[static_cast<size_t>(a)] > work[static_cast<size_t>(b)] : a < b;
+    });
+    std::array<int64_t, kSubstitutionGroups> load{};
+    assignment.assign(order.size(), 0);
+    for (size_t i = 0; i < order.size(); ++i) {
+      const auto g = static_cast<int32_t>(std::min_element(load.begin(), load.end()) - load.begin());
+      assignment[i] = g;
+      load[static_cast<size_t>(g)] += work[static_cast<size_t>(order[i])];
+    }
+    candidates = order;
+    const int64_t most = *std::max_element(load.begin(), load.end()), least = *std::min_element(load.begin(), load.end());
+    if (order.empty() || most - least <= most / 20 || 4 * top_work >= total) break;
+    const int32_t heaviest = order.front();
+    const int32_t own = super[heaviest + 1] - super[heaviest];
+    if (children[static_cast<size_t>(heaviest)].empty()) break;  // a leaf: nothing to split
+    in_top[static_cast<size_t>(heaviest)] = 1;
+    top_work += static_cast<int64_t>(own) * (pi[heaviest + 1] - pi[heaviest]);
+    candidates.erase(candidates.begin());
+    for (int32_t c : children[static_cast<size_t>(heaviest)]) candidates.push_back(c);
+  }
+  SubstitutionSchedule out;
+  std::vector<int8_t> group_of(static_cast<size_t>(nsuper), -1);
+  for (size_t i = 0; i < candidates.size(); ++i) group_of[static_cast<size_t>(candidates[i])] = static_cast<int8_t>(assignment[i]);
+  for (int32_t k = nsuper - 1; k >= 0; --k)  // parents before children: a subtree inherits its root's group
+    if (group_of[static_cast<size_t>(k)] < 0 && !in_top[static_cast<size_t>(k)] && parent[static_cast<size_t>(k)] >= 0)
+      group_of[static_cast<size_t>(k)] = group_of[static_cast<size_t>(parent[static_cast<size_t>(k)])];
+  out.owner.assign(f.n, -1);
+  for (int32_t k = 0; k < nsuper; ++k) {
+    out.max_rows = std::max(out.max_rows, static_cast<size_t>(pi[k + 1] - pi[k]));
+    const int8_t g = in_top[static_cast<size_t>(k)] ? int8_t{-1} : group_of[static_cast<size_t>(k)];
+    if (g < 0) {
+      out.top.push_back(k);
+      for (int32_t c = super[k]; c < super[k + 1]; ++c) out.top_rows.push_back(c);
+    } else {
+      out.groups[g].push_back(k);
+    }
+    for (int32_t c = super[k]; c < super[k + 1]; ++c) out.owner[static_cast<size_t>(c)] = g;
+  }
+  return out;
+}
+
 }  // namespace
 
 struct SparseCholesky::Impl {
@@ -49,8 +146,10 @@ struct SparseCholesky::Impl {
   std::vector<int32_t> outer, inner;
   int32_t n = 0;
   bool numeric = false;
-  std::vector<float> single;       // make_single(): the factor's blocks in float (empty: none)
-  mutable std::vector<float> work, gathered;
+  std::vector<float> single;       // make_single(): the blocks W_k = [L_kk; L_bk] L_kk^-1 in float (empty: none)
+  SubstitutionSchedule schedule;   // make_single(): the supernodes in kSubstitutionGroups subtrees and the top
+  mutable std::vector<float> work;
+  mutable std::vector<float> group_buffers[kSubstitutionGroups];  // per group: its products, its updates of the top's rows
   double analyze_s = 0, factor_s = 0;
 
   explicit Impl(std::string w) : where(std::move(w)) {
@@ -174,59 +273,133 @@ void SparseCholesky::solve(const double* b, double* x, int32_t k) const {
 void SparseCholesky::make_single() {
   Impl& s = *impl_;
   if (!s.numeric || !s.factor->is_super) throw RuntimeError(s.where + ": make_single() needs a supernodal factor");
-  const auto* x = static_cast<const double*>(s.factor->x);
-  s.single.assign(x, x + s.factor->xsize);
+  const cholmod_factor& f = *s.factor;
+  const auto* super = static_cast<const int32_t*>(f.super);
+  const auto* pi = static_cast<const int32_t*>(f.pi);
+  const auto* px = static_cast<const int32_t*>(f.px);
+  const auto* x = static_cast<const double*>(f.x);
+  s.single.assign(f.xsize, 0.0f);
+  std::vector<double> block;
+  const double one = 1;
+  for (size_t k = 0; k < f.nsuper; ++k) {
+    const int ncols = super[k + 1] - super[k], nrows = pi[k + 1] - pi[k];
+    // W_k = [L_kk; L_bk] L_kk^-1: L_kk^-1 solved from the identity (its upper triangle zero), the rows
+    // below by the same triangular solve from the right.
+    block.assign(x + px[k], x + px[k] + static_cast<size_t>(nrows) * ncols);
+    std::vector<double> diag(static_cast<size_t>(ncols) * ncols, 0.0);
+    for (int j = 0; j < ncols; ++j)
+      for (int i = j; i < ncols; ++i) diag[static_cast<size_t>(i + ncols * j)] = block[static_cast<size_t>(i + nrows * j)];
+    std::vector<double> w(static_cast<size_t>(nrows) * ncols, 0.0);
+    for (int j = 0; j < ncols; ++j) w[static_cast<size_t>(j + nrows * j)] = 1;
+    for (int j = 0; j < ncols; ++j)
+      for (int i = ncols; i < nrows; ++i) w[static_cast<size_t>(i + nrows * j)] = block[static_cast<size_t>(i + nrows * j)];
+    // Top: L_kk X = I. Below: X L_kk = L_bk.
+    dtrsm_("L", "L", "N", "N", &ncols, &ncols, &one, diag.data(), &ncols, w.data(), &nrows);
+    const int below = nrows - ncols;
+    if (below > 0) dtrsm_("R", "L", "N", "N", &below, &ncols, &one, diag.data(), &ncols, w.data() + ncols, &nrows);
+    float* out = s.single.data() + px[k];
+    for (size_t i = 0; i < w.size(); ++i) out[i] = static_cast<float>(w[i]);
+  }
+  s.schedule = substitution_schedule(f);
 }
 
 bool SparseCholesky::has_single() const { return !impl_->single.empty(); }
 
 // L L^T = P A P^T, L in supernodes: supernode k holds columns super[k] .. super[k+1] - 1, its rows
 // s[pi[k] .. pi[k+1]) (the first ones its own columns), its values a column-major block at px[k] with
-// the row count as leading dimension (CHOLMOD's cholmod_factor). x = P^T L^-T L^-1 P b, supernode by
-// supernode as CHOLMOD's own solve: the diagonal block by strsv, the rows below by sgemv, in float.
-void SparseCholesky::solve_single(const double* b, double* x) const {
-  const Impl& s = *impl_;
-  if (s.single.empty()) throw RuntimeError(s.where + ": solve_single() without make_single()");
-  const cholmod_factor& f = *s.factor;
+// the row count as leading dimension (CHOLMOD's cholmod_factor). make_single() stored each block as
+// W_k = [L_kk; L_bk] L_kk^-1, so that a supernode's step of each substitution is one matrix-vector
+// product (a triangular solve with a small block is many tiny BLAS steps; a product streams the block):
+//   forward  (L y = P b):   z = W_k y_k, then y_k = z_top, y_below -= z_below;
+//   backward (L^T z = y):   y_k = W_k^T [y_k; -y_below]   (= L_kk^-T (y_k - L_bk^T y_below)).
+namespace {
+
+// Supernode k's place in the factor: its first column, its column and row counts, its block W_k (in
+// the single-precision form `lx`, column-major, the row count as leading dimension) and its rows.
+struct SupernodeBlock {
+  int first, ncols, nrows;
+  const float* w;
+  const int32_t* rows;
+};
+
+inline SupernodeBlock supernode_block(const cholmod_factor& f, const float* lx, int32_t k) {
   const auto* super = static_cast<const int32_t*>(f.super);
   const auto* pi = static_cast<const int32_t*>(f.pi);
   const auto* px = static_cast<const int32_t*>(f.px);
-  const auto* rows = static_cast<const int32_t*>(f.s);
+  return {super[k], super[k + 1] - super[k], pi[k + 1] - pi[k], lx + px[k], static_cast<const int32_t*>(f.s) + pi[k]};
+}
+
+// out = W^T in (trans "T") or W in ("N"), in float.
+inline void block_product(const char* trans, const SupernodeBlock& b, const float* in, float* out) {
+  const int one = 1;
+  const float fone = 1, fzero = 0;
+  sgemv_(trans, &b.nrows, &b.ncols, &fone, b.w, &b.nrows, in, &one, &fzero, out, &one);
+}
+
+// One supernode's step of the forward substitution: z = W_k y_k into z (nrows), y_k = z_top, and the
+// rows below less z_below: into y where `owner` says they are the group's own (or any, for the top:
+// g < 0), else into the group's buffer `top_update` (the top's rows, summed in later).
+inline void forward_step(const cholmod_factor& f, const float* lx, int32_t k, int g, const int8_t* owner, float* y, float* z,
+                         float* top_update) {
+  const SupernodeBlock b = supernode_block(f, lx, k);
+  float* yk = y + b.first;
+  block_product("N", b, yk, z);
+  for (int i = 0; i < b.ncols; ++i) yk[i] = z[i];
+  for (int i = b.ncols; i < b.nrows; ++i) {
+    if (g < 0 || owner[b.rows[i]] == g) {
+      y[b.rows[i]] -= z[i];
+    } else {
+      top_update[b.rows[i]] += z[i];
+    }
+  }
+}
+
+// One supernode's step of the backward substitution: y_k = W_k^T [y_k; -y_below] (z: nrows of scratch).
+inline void backward_step(const cholmod_factor& f, const float* lx, int32_t k, float* y, float* z) {
+  const SupernodeBlock b = supernode_block(f, lx, k);
+  float* yk = y + b.first;
+  for (int i = 0; i < b.ncols; ++i) z[i] = yk[i];
+  for (int i = b.ncols; i < b.nrows; ++i) z[i] = -y[b.rows[i]];
+  block_product("T", b, z, yk);
+}
+
+}  // namespace
+
+void SparseCholesky::solve_single(const double* b, double* x, int threads) const {
+  const Impl& s = *impl_;
+  if (s.single.empty()) throw RuntimeError(s.where + ": solve_single() without make_single()");
+  const cholmod_factor& f = *s.factor;
+  const SubstitutionSchedule& plan = s.schedule;
   const auto* perm = static_cast<const int32_t*>(f.Perm);
   const float* lx = s.single.data();
-  const auto nsuper = static_cast<int32_t>(f.nsuper);
+  const auto n = static_cast<size_t>(s.n);
   std::vector<float>& y = s.work;
-  std::vector<float>& t = s.gathered;
-  y.resize(static_cast<size_t>(s.n));
-  for (int32_t i = 0; i < s.n; ++i) y[static_cast<size_t>(i)] = static_cast<float>(b[perm[i]]);
-  const int one = 1;
-  const float fone = 1, fzero = 0, fminus = -1;
-  // Forward: L y = P b.
-  for (int32_t k = 0; k < nsuper; ++k) {
-    const int k1 = super[k], ncols = super[k + 1] - k1, nrows = pi[k + 1] - pi[k], below = nrows - ncols;
-    const float* block = lx + px[k];
-    float* yk = y.data() + k1;
-    strsv_("L", "N", "N", &ncols, block, &nrows, yk, &one);
-    if (below == 0) continue;
-    t.resize(static_cast<size_t>(below));
-    sgemv_("N", &below, &ncols, &fone, block + ncols, &nrows, yk, &one, &fzero, t.data(), &one);
-    const int32_t* r = rows + pi[k] + ncols;
-    for (int i = 0; i < below; ++i) y[static_cast<size_t>(r[i])] -= t[static_cast<size_t>(i)];
+  y.resize(n);
+  for (size_t i = 0; i < n; ++i) y[i] = static_cast<float>(b[perm[i]]);
+  // Per group: n values of its own (the top's rows that it updates; zero elsewhere) and the scratch z.
+  for (auto& buffer : s.group_buffers) {
+    buffer.resize(n + plan.max_rows);
+    for (int32_t c : plan.top_rows) buffer[static_cast<size_t>(c)] = 0;
   }
-  // Backward: L^T z = y.
-  for (int32_t k = nsuper - 1; k >= 0; --k) {
-    const int k1 = super[k], ncols = super[k + 1] - k1, nrows = pi[k + 1] - pi[k], below = nrows - ncols;
-    const float* block = lx + px[k];
-    float* yk = y.data() + k1;
-    if (below > 0) {
-      t.resize(static_cast<size_t>(below));
-      const int32_t* r = rows + pi[k] + ncols;
-      for (int i = 0; i < below; ++i) t[static_cast<size_t>(i)] = y[static_cast<size_t>(r[i])];
-      sgemv_("T", &below, &ncols, &fminus, block + ncols, &nrows, t.data(), &one, &fone, yk, &one);
-    }
-    strsv_("L", "T", "N", &ncols, block, &nrows, yk, &one);
+  const int t = std::clamp(threads, 1, kSubstitutionGroups);
+  // Forward: the groups' subtrees, then the top with their updates summed in group order.
+#pragma omp parallel for schedule(static, 1) num_threads(t)
+  for (int g = 0; g < kSubstitutionGroups; ++g) {
+    float* own = s.group_buffers[g].data();
+    for (int32_t k : plan.groups[g]) forward_step(f, lx, k, g, plan.owner.data(), y.data(), own + n, own);
   }
-  for (int32_t i = 0; i < s.n; ++i) x[perm[i]] = static_cast<double>(y[static_cast<size_t>(i)]);
+  for (int32_t c : plan.top_rows)
+    for (const auto& buffer : s.group_buffers) y[static_cast<size_t>(c)] -= buffer[static_cast<size_t>(c)];
+  float* z = s.group_buffers[0].data() + n;
+  for (int32_t k : plan.top) forward_step(f, lx, k, -1, plan.owner.data(), y.data(), z, nullptr);
+  // Backward: the top, then the groups (each reads only its own rows and the top's).
+  for (auto k = plan.top.rbegin(); k != plan.top.rend(); ++k) backward_step(f, lx, *k, y.data(), z);
+#pragma omp parallel for schedule(static, 1) num_threads(t)
+  for (int g = 0; g < kSubstitutionGroups; ++g) {
+    float* own = s.group_buffers[g].data() + n;
+    for (auto k = plan.groups[g].rbegin(); k != plan.groups[g].rend(); ++k) backward_step(f, lx, *k, y.data(), own);
+  }
+  for (size_t i = 0; i < n; ++i) x[perm[i]] = static_cast<double>(y[i]);
 }
 
 int32_t SparseCholesky::size() const { return impl_->n; }

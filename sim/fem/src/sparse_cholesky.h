@@ -48,16 +48,20 @@ class SparseCholesky {
   // X = A^-1 B for k right-hand sides (column-major n x k), in one pass over the factor.
   void solve(const double* b, double* x, int32_t k) const;
 
-  // A single-precision copy of the current factor, for solves that only precondition (the quasi-Newton
-  // iteration's initial inverse Hessian, fem_quasi_newton.cpp): the supernodal forward and back
-  // substitutions of our own over float blocks, accumulated in double, serial (deterministic). Half the
-  // memory traffic of solve() (the substitutions are bandwidth-bound: a 48 MB factor is read twice per
-  // solve), to float's precision times the matrix's conditioning (not checked here: its callers only
-  // precondition, and converge on the double-precision residual). make_single() after factorize() (RuntimeError without a
-  // supernodal factor); the next factorize() or analyze() forgets the copy.
+  // A single-precision form of the current factor, for solves that only precondition (the quasi-Newton
+  // iteration's initial inverse Hessian, fem_quasi_newton.cpp): each supernode's block stored as
+  // [L_kk; L_bk] L_kk^-1 (its diagonal block inverted in double, then rounded), so that each step of the
+  // forward and back substitutions is one float matrix-vector product instead of a triangular solve of
+  // many tiny steps; half the memory traffic of solve(). To float's precision times the matrix's
+  // conditioning (not checked here: its callers only precondition, and converge on the double-precision
+  // residual; measured 4e-7 relative on the live heart's rest stiffness). make_single() after factorize()
+  // (RuntimeError without a supernodal factor); the next factorize() or analyze() forgets it.
+  // The substitutions run over two disjoint subtrees of the elimination tree at once (`threads`: 1 or
+  // more; more than 2 use 2), then over the supernodes above them; the result's bits do not depend on
+  // `threads` (the split is fixed by the factor's structure).
   void make_single();
   bool has_single() const;
-  void solve_single(const double* b, double* x) const;
+  void solve_single(const double* b, double* x, int threads) const;
 
   int32_t size() const;
   double analyze_seconds() const;   // the last analysis

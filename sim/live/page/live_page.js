@@ -590,6 +590,8 @@ function showOverlay() {
       const f = Math.hypot(...l.force_n), m = Math.hypot(...l.moment_n_mm);
       parts.push(`tool ${l.id}: ${(f * 1000).toFixed(1)} mN, ${(m * 1000).toFixed(0)} mN·mm`);
     }
+    // The solver's own estimate of how far this frame is from its converged solution (FEM quasi-Newton).
+    if (typeof s.solver_error_mm === 'number') parts.push(`solver error ≈ ${s.solver_error_mm.toFixed(2)} mm`);
   }
   parts.push(`page ${hook.pageFps}/s`);
   const latency = hook.latencies[hook.latencies.length - 1];

@@ -190,6 +190,7 @@ json server_message_json(const LiveStatus& m) {
   for (const LiveToolLoad& l : m.loads) loads.push_back({{"id", l.id}, {"force_n", l.force_n}, {"moment_n_mm", l.moment_n_mm}});
   return {{"type", "status"},
           {"loads", loads},
+          {"solver_error_mm", std::isfinite(m.solver_error_mm) ? json(m.solver_error_mm) : json(nullptr)},
           {"time_s", m.time_s},
           {"steps", m.steps},
           {"dt_s", m.dt_s},

@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cmath>
 #include <limits>
 #include <utility>
 
@@ -105,6 +106,17 @@ void LiveSession::reset() {
   restart_message_.clear();
   stopped_message_.clear();
   build({}, 1);
+}
+
+double LiveSession::solver_error_mm() const {
+  const SimulationEngine& e = loop_->engine();
+  const auto names = e.extra_metrics();
+  for (size_t i = 0; i < names.size(); ++i) {
+    if (names[i].first != "solver_error_mm") continue;
+    const EngineMetrics m = e.metrics();
+    return i < m.extra.size() ? m.extra[i] : NAN;
+  }
+  return NAN;
 }
 
 std::vector<LiveToolLoad> LiveSession::tool_loads() const {

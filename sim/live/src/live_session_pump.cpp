@@ -200,7 +200,8 @@ void LiveSessionPump::send_status() {
   if (current_ != 0 && now - last_status_ >= std::chrono::milliseconds(250)) {
     last_status_ = now;
     send(LiveStatus{session_.time(), session_.steps(), session_.dt(), rtf_, pictures_per_s_, session_.paused(),
-                    session_.stopped_message(), session_.halvings(), session_.frames(), last_frame_bytes_, session_.tool_loads()});
+                    session_.stopped_message(), session_.halvings(), session_.frames(), last_frame_bytes_, session_.tool_loads(),
+                    session_.solver_error_mm()});
   }
 }
 

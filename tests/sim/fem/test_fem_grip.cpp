@@ -178,7 +178,9 @@ TEST(FemGrip, ImplicitMidpointStepsFollowAMovingGrip) {
   const std::vector<double>& u = d.displacements();
   for (size_t k = 0; k < g.nodes.size(); ++k) {
     const size_t n = static_cast<size_t>(g.nodes[k]);
-    if (std::hypot(m.nodes[3 * n] - 5, m.nodes[3 * n + 1] - 5, m.nodes[3 * n + 2] - 22) < 2) EXPECT_NEAR(u[3 * n], 2.0, 0.2);
+    if (std::hypot(m.nodes[3 * n] - 5, m.nodes[3 * n + 1] - 5, m.nodes[3 * n + 2] - 22) < 2) {
+      EXPECT_NEAR(u[3 * n], 2.0, 0.2);
+    }
   }
 }
 

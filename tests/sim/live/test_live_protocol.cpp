@@ -262,11 +262,11 @@ TEST(LiveProtocol, ServerMessagesEncodeToTheirExactText) {
             R"({"id":2,"type":"ended","why":"the session was reset"})");
   EXPECT_EQ(encode_live_server_message(LiveStatus{0.25, 250, 0.001, 0.5, 59.5, true, "", 1, 26, 1592, {}}),
             R"({"dt_s":0.001,"frame_bytes":1592,"frames_recorded":26,"halvings":1,"loads":[],"paused":true,"pictures_per_s":59.5,)"
-            R"("rtf":0.5,"steps":250,"stopped":"","time_s":0.25,"type":"status"})");
-  EXPECT_EQ(encode_live_server_message(LiveStatus{0, 0, 0, 0, 0, false, "", 0, 0, 0, {LiveToolLoad{1, {0.5, -0.25, 0}, {2, 0, -1}}}}),
+            R"("rtf":0.5,"solver_error_mm":null,"steps":250,"stopped":"","time_s":0.25,"type":"status"})");
+  EXPECT_EQ(encode_live_server_message(LiveStatus{0, 0, 0, 0, 0, false, "", 0, 0, 0, {LiveToolLoad{1, {0.5, -0.25, 0}, {2, 0, -1}}}, 0.0375}),
             R"({"dt_s":0.0,"frame_bytes":0,"frames_recorded":0,"halvings":0,"loads":[{"force_n":[0.5,-0.25,0.0],"id":1,)"
-            R"("moment_n_mm":[2.0,0.0,-1.0]}],"paused":false,"pictures_per_s":0.0,"rtf":0.0,"steps":0,"stopped":"","time_s":0.0,)"
-            R"("type":"status"})");
+            R"("moment_n_mm":[2.0,0.0,-1.0]}],"paused":false,"pictures_per_s":0.0,"rtf":0.0,"solver_error_mm":0.0375,"steps":0,)"
+            R"("stopped":"","time_s":0.0,"type":"status"})");
   EXPECT_EQ(encode_live_server_message(LiveGuard{LiveGuard::Action::halved, "step halved to 0.5 ms"}),
             R"({"action":"halved","message":"step halved to 0.5 ms","type":"guard"})");
   EXPECT_EQ(encode_live_server_message(LiveGuard{LiveGuard::Action::stopped, "unstable"}),
@@ -291,7 +291,8 @@ TEST(LiveProtocol, ServerMessagesNumbersReadBackBitForBit) {
     const auto any_double = [&] { return mantissa(rng) * std::pow(10.0, exponent(rng)); };
     const LiveStatus s{any_double(), static_cast<int64_t>(rng()), any_double(), any_double(), any_double(),
                        n % 2 == 0, "stopped \u00b5 \"quoted\"\n", static_cast<int>(rng() % 1000), INT64_MAX - n, SIZE_MAX - n,
-                       {LiveToolLoad{n, {any_double(), any_double(), any_double()}, {any_double(), any_double(), any_double()}}}};
+                       {LiveToolLoad{n, {any_double(), any_double(), any_double()}, {any_double(), any_double(), any_double()}}},
+                       any_double()};
     const nlohmann::json back = nlohmann::json::parse(encode_live_server_message(s));
     ASSERT_EQ(back["type"], "status");
     EXPECT_EQ(back["time_s"].get<double>(), s.time_s);
@@ -304,6 +305,7 @@ TEST(LiveProtocol, ServerMessagesNumbersReadBackBitForBit) {
     EXPECT_EQ(back["halvings"].get<int>(), s.halvings);
     EXPECT_EQ(back["frames_recorded"].get<int64_t>(), s.frames_recorded);
     EXPECT_EQ(back["frame_bytes"].get<size_t>(), s.frame_bytes);
+    EXPECT_EQ(back["solver_error_mm"].get<double>(), s.solver_error_mm);
     EXPECT_EQ(back["loads"][0]["id"].get<int>(), n);
     for (size_t c = 0; c < 3; ++c) {
       EXPECT_EQ(back["loads"][0]["force_n"][c].get<double>(), s.loads[0].force_n[c]);

@@ -205,6 +205,33 @@ TEST(LiveSession, FemGrabsReplayBitForBitDynamicAndQuasiStatic) {
   }
 }
 
+// The status line's "solver error" (LiveSession::solver_error_mm): a quasi-Newton FEM session reports
+// each frame's estimate (the engine's metric solver_error_mm, within the frame's budget's reach while
+// a grab drags), a Newton one and a spring model none (NaN: the page shows nothing).
+TEST(LiveSession, AQuasiNewtonSessionReportsItsSolverError) {
+  TempDir dir;
+  ctsurg::sim::test::write_block_files(dir.path(), 16, 4, 4, 2.0);
+  ctsurg::sim::test::write_bar_tet_mesh(dir.path());
+  std::string text = fem_text("static");
+  text += "solver: {nonlinear: quasi_newton, tolerance_mm: 0.05}\n";
+  LiveSession session = session_of(dir.path(), text);
+  session.advance_events(1);
+  const int grab = session.begin_tool({&tool_type("grab"), 4.5, {}, {43, -15, 35}});
+  double most = 0;
+  for (int k = 1; k <= 8; ++k) {
+    session.move_tool(grab, {43, -15, 35 + 0.5 * k});
+    session.advance_events(1);
+    const double e = session.solver_error_mm();
+    ASSERT_TRUE(std::isfinite(e)) << "frame " << k;
+    EXPECT_GE(e, 0.0);
+    most = std::max(most, e);
+  }
+  EXPECT_GT(most, 0.0);  // an estimate, not a constant
+  EXPECT_LT(most, 1.0);  // of a solve converged to 0.05 mm, on a 4 mm drag
+  EXPECT_TRUE(std::isnan(session_of(dir.path(), fem_text("static")).solver_error_mm()));
+  EXPECT_TRUE(std::isnan(session_of(dir.path(), live_bar_text()).solver_error_mm()));
+}
+
 TEST(LiveSession, AnFemCutBetweenBatchedStepsReplaysBitForBit) {
   TempDir dir;
   ctsurg::sim::test::write_block_files(dir.path(), 16, 4, 4, 2.0);

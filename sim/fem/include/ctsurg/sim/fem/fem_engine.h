@@ -176,6 +176,8 @@ class FemEngine final : public SimulationEngine {
   // with the state carried over when a cut or a removal changes the mesh.
   std::unique_ptr<FemIntegrator> integrator_;
   int solves_ = 0, newton_ = 0, cg_ = 0;  // static frames solved; the Newton and CG iterations (metrics)
+  double solver_error_mm_ = NAN;          // the last static frame's FemAdvance::solver_error_mm
+  bool reports_solver_error() const;      // the metric solver_error_mm: static, quasi-Newton, no local region
   int64_t steps_ = 0;
   // Cutting (fem_cutting.h): the faces separated so far, and each surface vertex's tet and tie corners.
   std::unique_ptr<FemTetSeparation> separation_;

@@ -27,6 +27,7 @@
 #include "ctsurg/sim/fem/fem_static_solver.h"
 #include "ctsurg/sim/fem/fem_tools.h"
 
+#include <cmath>
 #include <cstdint>
 #include <memory>
 #include <vector>
@@ -43,6 +44,7 @@ struct FemAdvance {
   StabilityReport stability;
   int newton_iterations = 0;
   int cg_iterations = 0;
+  double solver_error_mm = NAN;  // a static quasi-Newton frame's FemStaticReport::error_estimate_mm, else NaN
 };
 
 // The state an integrator carries over a change of the mesh (a cut splitting nodes, a removal of

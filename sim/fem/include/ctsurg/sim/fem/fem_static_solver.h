@@ -39,6 +39,7 @@
 #include "ctsurg/sim/fem/fem_model.h"
 
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <memory>
 #include <vector>
@@ -129,6 +130,11 @@ struct FemStaticReport {
   int64_t factor_bytes = 0;               // the factor's size (direct)
   int quasi_newton_iterations = 0;        // quasi_newton: L-BFGS iterations (the lift included)
   int quasi_newton_fallbacks = 0;         // quasi_newton: load steps that went on with Newton
+  // quasi_newton: the estimate of the solution's distance from the converged one where the last load
+  // step ended: the largest nodal displacement (mm) of the step L-BFGS would take next (H r, its inverse
+  // Hessian applied to the last residual; one more substitution). NaN where not estimated (Newton, or a
+  // step that went on with Newton).
+  double error_estimate_mm = NAN;
 };
 
 struct FemStaticResult {

@@ -33,9 +33,13 @@
 //   {"type": "ended", "id": n, "why": text}               (a tool the server let go: reset, stop)
 //   {"type": "status", "time_s", "steps", "dt_s", "rtf", "pictures_per_s", "paused", "stopped": text,
 //    "halvings", "frames_recorded", "frame_bytes",
-//    "loads": [{"id", "force_n": [3], "moment_n_mm": [3]}]}   (about four times a second; loads: each user
+//    "loads": [{"id", "force_n": [3], "moment_n_mm": [3]}], "solver_error_mm": mm | null}
+//                                                         (about four times a second; loads: each user
 //                                                         tool whose load on the tissue the engine measures,
-//                                                         SimulationEngine::tool_load)
+//                                                         SimulationEngine::tool_load; solver_error_mm: the
+//                                                         last frame's estimate of how far its solve is from
+//                                                         converged, where the model gives one: the
+//                                                         engine's metric of that name, FEM quasi-Newton)
 //   {"type": "guard", "action": "halved" | "stopped", "message": text}
 //   {"type": "error", "message": text, "seq"}             (a message refused)
 //   {"type": "saved", "scenario", "trajectory", "frames", "time_s", "seq"}
@@ -66,6 +70,7 @@
 #include "ctsurg/sim/scenario/tool_type.h"
 
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <optional>
 #include <span>
@@ -160,6 +165,7 @@ struct LiveStatus {
   int64_t frames_recorded = 0;
   size_t frame_bytes = 0;                  // the last frame's size
   std::vector<LiveToolLoad> loads;         // the user tools' measured loads now
+  double solver_error_mm = NAN;            // the last frame's estimate of its solver error (FEM quasi-Newton), else NaN
 };
 struct LiveGuard {
   enum class Action { halved, stopped };   // the step was halved (the session goes on) | the session stopped
