@@ -33,6 +33,7 @@ FemImplicitDynamics::FemImplicitDynamics(const FemModel& model, const FemImplici
   if (options_.newton.tolerance_mm == 0) options_.newton.tolerance_mm = 1e-4;
   options_.newton.threads = o.threads;
   options_.newton.initial_displacements.clear();
+  options_.newton.estimate_error = false;  // a step's FemAdvance carries no solver error
   validate_fem_static(model, {}, {}, options_.newton);
   if (backend == Backend::cuda) device_cg_ = std::make_unique<DeviceConjugateGradient>(kImplicitWhere);
   newton_ = std::make_unique<FemNewton>(model, options_.newton, device_cg_.get(), kImplicitWhere);

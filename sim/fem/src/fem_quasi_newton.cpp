@@ -97,7 +97,6 @@ bool FemNewton::quasi_newton(std::vector<double>& u, double s, FemStaticReport& 
   std::vector<double> trial(u.size()), gap(u.size());
   bool lifting = held_gap(u, s, gap);
   std::deque<LbfgsPair>& pairs = lbfgs_pairs_;  // the last solve's, while J_0 is the same (fem_newton.h)
-  if (!pairs.empty() && pairs.front().s.size() != r.size()) pairs.clear();
   std::vector<double> a(static_cast<std::size_t>(o_.lbfgs_history));
   const double rest_scale = 1 + terms_.stiffness_damping;
   // out = H in by the two-loop recursion (H_0 = J_0^-1); `in` is overwritten.
@@ -115,6 +114,7 @@ bool FemNewton::quasi_newton(std::vector<double>& u, double s, FemStaticReport& 
   };
   // Converged: the next step's largest nodal displacement is the estimate of the error left.
   const auto converged = [&] {
+    if (!o_.estimate_error) return true;
     const auto t0 = QuasiNewtonClock::now();
     q = r;
     two_loop(q, d);

@@ -279,20 +279,20 @@ void SparseCholesky::make_single() {
   const auto* px = static_cast<const int32_t*>(f.px);
   const auto* x = static_cast<const double*>(f.x);
   s.single.assign(f.xsize, 0.0f);
-  std::vector<double> block;
+  std::vector<double> diag, w;
   const double one = 1;
   for (size_t k = 0; k < f.nsuper; ++k) {
     const int ncols = super[k + 1] - super[k], nrows = pi[k + 1] - pi[k];
     // W_k = [L_kk; L_bk] L_kk^-1: L_kk^-1 solved from the identity (its upper triangle zero), the rows
     // below by the same triangular solve from the right.
-    block.assign(x + px[k], x + px[k] + static_cast<size_t>(nrows) * ncols);
-    std::vector<double> diag(static_cast<size_t>(ncols) * ncols, 0.0);
+    const double* block = x + px[k];
+    diag.assign(static_cast<size_t>(ncols) * ncols, 0.0);
     for (int j = 0; j < ncols; ++j)
-      for (int i = j; i < ncols; ++i) diag[static_cast<size_t>(i + ncols * j)] = block[static_cast<size_t>(i + nrows * j)];
-    std::vector<double> w(static_cast<size_t>(nrows) * ncols, 0.0);
+      for (int i = j; i < ncols; ++i) diag[static_cast<size_t>(i + ncols * j)] = block[i + nrows * j];
+    w.assign(static_cast<size_t>(nrows) * ncols, 0.0);
     for (int j = 0; j < ncols; ++j) w[static_cast<size_t>(j + nrows * j)] = 1;
     for (int j = 0; j < ncols; ++j)
-      for (int i = ncols; i < nrows; ++i) w[static_cast<size_t>(i + nrows * j)] = block[static_cast<size_t>(i + nrows * j)];
+      for (int i = ncols; i < nrows; ++i) w[static_cast<size_t>(i + nrows * j)] = block[i + nrows * j];
     // Top: L_kk X = I. Below: X L_kk = L_bk.
     dtrsm_("L", "L", "N", "N", &ncols, &ncols, &one, diag.data(), &ncols, w.data(), &nrows);
     const int below = nrows - ncols;

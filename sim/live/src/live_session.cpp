@@ -12,7 +12,6 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <cmath>
 #include <limits>
 #include <utility>
 
@@ -108,16 +107,7 @@ void LiveSession::reset() {
   build({}, 1);
 }
 
-double LiveSession::solver_error_mm() const {
-  const SimulationEngine& e = loop_->engine();
-  const auto names = e.extra_metrics();
-  for (size_t i = 0; i < names.size(); ++i) {
-    if (names[i].first != "solver_error_mm") continue;
-    const EngineMetrics m = e.metrics();
-    return i < m.extra.size() ? m.extra[i] : NAN;
-  }
-  return NAN;
-}
+double LiveSession::solver_error_mm() const { return loop_->recorder().last_metric("solver_error_mm"); }
 
 std::vector<LiveToolLoad> LiveSession::tool_loads() const {
   std::vector<LiveToolLoad> loads;

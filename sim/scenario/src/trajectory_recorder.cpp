@@ -175,6 +175,12 @@ void TrajectoryRecorder::record(SimulationEngine& engine, const ToolTimeline& ti
   }
 }
 
+double TrajectoryRecorder::last_metric(std::string_view name) const {
+  for (const TrajectoryMetric& m : metrics_)
+    if (m.name == name) return m.values.empty() ? NAN : m.values.back();
+  return NAN;
+}
+
 void TrajectoryRecorder::truncate(size_t frames) {
   if (frames >= traj_.time.size()) return;
   traj_.time.resize(frames);

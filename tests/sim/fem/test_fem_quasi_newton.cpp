@@ -49,17 +49,22 @@ FemStaticOptions quasi_newton_options(double tolerance_mm) {
   return o;
 }
 
+// Newton to the relative `tolerance` on residual and displacement: the converged solution to compare with.
+FemStaticOptions exact_newton(double tolerance, int load_steps) {
+  FemStaticOptions o;
+  o.residual_tolerance = tolerance;
+  o.displacement_tolerance = tolerance;
+  o.load_steps = load_steps;
+  return o;
+}
+
 TEST(FemQuasiNewton, ReachesNewtonsSolutionWithinItsBudgetOnEveryLaw) {
   // A bend and a stretch of a third of the column's height: rotations the linear law gets wrong, so the
   // laws' solutions differ by millimetres, and each must match its own Newton solution.
   for (const FemLaw law : {FemLaw::linear, FemLaw::corotational, FemLaw::stvk, FemLaw::neo_hookean, FemLaw::mooney_rivlin}) {
     SCOPED_TRACE(fem_law_name(law));
     const GrabbedColumn c = grabbed_column(law, {8, 0, 4});
-    FemStaticOptions exact;
-    exact.residual_tolerance = 1e-10;
-    exact.displacement_tolerance = 1e-10;
-    exact.load_steps = 4;
-    const FemStaticResult newton = solve_fem_static(c.model, c.bc, {}, exact);
+    const FemStaticResult newton = solve_fem_static(c.model, c.bc, {}, exact_newton(1e-10, 4));
     ASSERT_TRUE(newton.report.converged);
     const double budget = 1e-3;
     FemStaticOptions qn = quasi_newton_options(budget);
@@ -82,11 +87,7 @@ TEST(FemQuasiNewton, ReachesNewtonsSolutionWithinItsBudgetOnEveryLaw) {
 // bent and stretched column solved to loose budgets. Newton's report has none.
 TEST(FemQuasiNewton, EstimatesItsRemainingErrorWithinAFactorOfTheTrueOne) {
   const GrabbedColumn c = grabbed_column(FemLaw::neo_hookean, {8, 0, 4});
-  FemStaticOptions exact;
-  exact.residual_tolerance = 1e-11;
-  exact.displacement_tolerance = 1e-11;
-  exact.load_steps = 4;
-  const FemStaticResult newton = solve_fem_static(c.model, c.bc, {}, exact);
+  const FemStaticResult newton = solve_fem_static(c.model, c.bc, {}, exact_newton(1e-11, 4));
   ASSERT_TRUE(newton.report.converged);
   EXPECT_TRUE(std::isnan(newton.report.error_estimate_mm));
   const auto largest_nodal = [](const std::vector<double>& a, const std::vector<double>& b) {
@@ -120,10 +121,7 @@ TEST(FemQuasiNewton, GravityAloneConvergesToNewtonsSolution) {
   bc.fixed_nodes = nodes_where(m, 2, 0);
   FemLoads loads;
   loads.gravity = {9810, 0, 0};
-  FemStaticOptions exact;
-  exact.residual_tolerance = 1e-10;
-  exact.displacement_tolerance = 1e-10;
-  const FemStaticResult newton = solve_fem_static(m, bc, loads, exact);
+  const FemStaticResult newton = solve_fem_static(m, bc, loads, exact_newton(1e-10, FemStaticOptions{}.load_steps));
   const FemStaticResult quasi = solve_fem_static(m, bc, loads, quasi_newton_options(1e-4));
   ASSERT_TRUE(quasi.report.converged);
   EXPECT_GT(test::max_abs(newton.displacements), 1.0);  // a real sag, not a rounding

@@ -108,6 +108,9 @@ struct FemStaticOptions {
   FemNonlinearSolve nonlinear = FemNonlinearSolve::newton;  // see above
   int lbfgs_history = 5;                 // quasi_newton: the (s, y) pairs kept, [1, 50]
   int max_quasi_newton_iterations = 60;  // quasi_newton: per load step, then Newton
+  // quasi_newton: report.error_estimate_mm at the end of each load step (one more substitution; the
+  // implicit dynamics, which has no use for it, turns it off).
+  bool estimate_error = true;
 };
 
 struct FemStaticReport {

@@ -120,8 +120,9 @@ class LiveSession {
   const SimulationEngine& engine() const;
   // The loads the user's tools exert on the tissue now (those the engine measures: SimulationEngine::tool_load).
   std::vector<LiveToolLoad> tool_loads() const;
-  // The last frame's estimate of its solver error (mm): the engine's metric solver_error_mm (FEM static
-  // quasi-Newton, fem_static_solver.h FemStaticReport::error_estimate_mm), NaN for a model without one.
+  // The last frame's estimate of its solver error (mm): the engine's metric solver_error_mm as the
+  // recorder recorded it (FEM static quasi-Newton, fem_static_solver.h FemStaticReport::error_estimate_mm),
+  // NaN for a model without one.
   double solver_error_mm() const;
   const Scenario& scenario() const { return scenario_; }
 

@@ -27,6 +27,7 @@
 #include "ctsurg/sim/scenario/tool_timeline.h"
 
 #include <cstdint>
+#include <string_view>
 #include <vector>
 
 namespace ctsurg::sim {
@@ -43,6 +44,8 @@ class TrajectoryRecorder {
   // Records the engine's state (after its sync()) as the frame at time t (s).
   void record(SimulationEngine& engine, const ToolTimeline& timeline, double t);
   size_t frames() const { return traj_.time.size(); }
+  // The named metric's value at the last recorded frame; NaN without such a metric or a frame.
+  double last_metric(std::string_view name) const;
   void truncate(size_t frames);
   // Tool i of the timeline, added since the last record() (a grab, probe or cut that starts after the
   // frames recorded so far), once its first keyframe is final; tools are added in the timeline's order.
