@@ -1,7 +1,8 @@
 // Live sessions on the bundled heart (issue 22, performance): for each model the heart scenarios use, a
 // LiveSession built from the scenario without its own tools, driven exactly as ctsurg-live drives it: a
 // loop of ticks, each applying the client messages that have arrived (JSON text through
-// parse_live_message, as the server gets them), then session.advance(1/60) (1/60 s of simulated time
+// parse_live_message, as the server gets them; each move travelling over a tick,
+// LiveSession::set_move_ramp_s, as the server sets it), then session.advance(1/60) (1/60 s of simulated time
 // asked for within at most 1/60 s of wall time), then the frame the server sends
 // (encode_live_frame(live_frame_of(...)): the positions, with the triangles when the topology changed).
 //
@@ -198,6 +199,7 @@ Run run(const Scenario& scenario, const std::string& text, bool paced) {
   Run r;
   const auto t0 = Clock::now();
   LiveSession session(scenario, text);
+  session.set_move_ramp_s(kTick);  // as ctsurg-live: a move travels over a tick
   r.setup_s = std::chrono::duration<double>(Clock::now() - t0).count();
   LiveProtocolLimits limits;
   limits.bounds = session.rest_bounds();

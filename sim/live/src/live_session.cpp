@@ -13,6 +13,7 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <utility>
 
 namespace ctsurg::sim {
@@ -92,6 +93,13 @@ void LiveSession::end_tool(int id) {
   pending_.push_back({Pending::Kind::end, id, {}});
 }
 
+void LiveSession::set_move_ramp_s(double seconds) {
+  if (!std::isfinite(seconds) || seconds < 0) {
+    throw InputError(kSessionWhere, "move_ramp_s", "must be a finite number of seconds >= 0, not " + exact_number(seconds));
+  }
+  move_ramp_s_ = seconds;
+}
+
 bool LiveSession::tool_active(int id) const { return id >= 0 && static_cast<size_t>(id) < ended_.size() && !ended_[static_cast<size_t>(id)]; }
 
 void LiveSession::resume() {
@@ -162,7 +170,7 @@ void LiveSession::apply_pending() {
         }
         const Keyframe last = timeline.tool(i).path.back();
         if (last.t < t) timeline.add_keyframe(i, t, last.point.value, origin);
-        timeline.add_keyframe(i, t1, p.spec.position_mm, origin);
+        timeline.add_keyframe(i, std::max(t1, t + move_ramp_s_), p.spec.position_mm, origin);
         break;
       }
       case Pending::Kind::end:
@@ -199,7 +207,20 @@ void LiveSession::go_back(const std::string& why) {
   for (size_t i = scenario_.tools.size(); i < timeline.size(); ++i) {
     ToolAction tool = timeline.tool(i);
     if (tool.start_s > t_frame) break;  // begun after the frame: later tools too
-    while (tool.path.size() > 1 && tool.path.back().t > t_frame) tool.path.pop_back();
+    std::optional<Keyframe> after;  // the first keyframe past the frame
+    while (tool.path.size() > 1 && tool.path.back().t > t_frame) {
+      after = tool.path.back();
+      tool.path.pop_back();
+    }
+    // A ramp under way at the frame ends there, where it had brought the tool.
+    if (after && tool.path.back().t < t_frame && after->point.value != tool.path.back().point.value) {
+      const Vec3 local = timeline.position(i, t_frame);
+      const Vec3& o = loop_->engine().origin();
+      Keyframe cut = *after;
+      cut.t = t_frame;
+      cut.point.value = {local[0] + o[0], local[1] + o[1], local[2] + o[2]};
+      tool.path.push_back(cut);
+    }
     if (tool.end_s > t_frame) tool.end_s = std::numeric_limits<double>::infinity();
     ended.push_back(std::isfinite(tool.end_s));
     tools.push_back(std::move(tool));

@@ -30,6 +30,8 @@ LiveSessionPump::LiveSessionPump(LiveSession& session, const LiveServerOptions& 
       last_status_(LiveWallClock::now() - std::chrono::seconds(1)) {
   limits_.bounds = session.rest_bounds();
   limits_.margin_mm = options.margin_mm;
+  // A move travels over one tick of simulated time, the page's interval between messages.
+  session.set_move_ramp_s(options.realtime_factor / options.picture_hz);
 }
 
 void LiveSessionPump::run() {

@@ -24,6 +24,8 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <atomic>
+#include <chrono>
 #include <csignal>
 #include <fstream>
 #include <random>
@@ -328,6 +330,22 @@ TEST(CtsurgLive, CtrlCAfterASaveSavesTheRestAndExitsCleanly) {
     _exit(127);
   }
   close(out[1]);
+  // A session that stopped sending pictures would leave the reads below waiting for ever: after 120 s
+  // the tool is killed, its socket closes and the test fails below instead of at ctest's timeout.
+  struct Watchdog {
+    pid_t pid;
+    std::atomic<bool> done{false};
+    std::thread thread{[this] {
+      for (int k = 0; k < 1200 && !done; ++k) std::this_thread::sleep_for(std::chrono::milliseconds(100));
+      if (!done) kill(pid, SIGKILL);
+    }};
+    explicit Watchdog(pid_t p) : pid(p) {}
+    ~Watchdog() { disarm(); }
+    void disarm() {
+      done = true;
+      if (thread.joinable()) thread.join();
+    }
+  } watchdog(pid);
   // The URL is the line with http://.
   std::string printed, url;
   char buffer[256];
@@ -355,8 +373,9 @@ TEST(CtsurgLive, CtrlCAfterASaveSavesTheRestAndExitsCleanly) {
     drag(0, 38);
     c.send(R"({"type": "save"})");
     EXPECT_EQ(c.next_text()["type"], "saved");
-    drag(1, 32);  // unsaved
+    drag(1, 32);  // unsaved: a 3 mm move in one message (it travels over a picture tick)
   }
+  watchdog.disarm();
   ASSERT_EQ(kill(pid, SIGINT), 0);
   int status = 0;
   ASSERT_EQ(waitpid(pid, &status, 0), pid);

@@ -3,7 +3,8 @@
 // an FEM cut between batched steps, each saved and replayed through run_scenario (in-process) and the
 // ctsurg-sim tool to the same trajectory, bit for bit; pause, resume, reset and real-time advancing; step
 // halvings while dragging; a jump that makes the model unstable and a grab on empty space, reported
-// with the guard's (or the engine's) message, the session back at the frame before; the binary frames
+// with the guard's (or the engine's) message, the session back at the frame before; a move travelling
+// over its ramp, and a ramp cut at the frame a stopped session goes back to; the binary frames
 // of the session (live_protocol.h) carrying the triangles only when a cut changed them.
 #include "ctsurg/sim/live/live_session.h"
 
@@ -349,4 +350,85 @@ TEST(LiveSession, BadToolsAreRefusedWithTheFieldNamed) {
   EXPECT_THROW(session.end_tool(-1), InputError);
   // Nothing recorded after the rest frame yet: nothing to save.
   EXPECT_THROW(session.scenario_text("x.h5"), InputError);
+}
+
+// A move with a ramp (ctsurg-live: a picture tick) travels to its position over the ramp instead of
+// arriving at the next step's end; the session replays bit for bit.
+TEST(LiveSession, AMoveTravelsOverItsRampAndReplaysBitForBit) {
+  TempDir dir;
+  ctsurg::sim::test::write_block_files(dir.path(), 16, 4, 4, 2.0);
+  LiveSession session = session_of(dir.path(), live_bar_text());
+  EXPECT_THROW(session.set_move_ramp_s(-0.01), InputError);
+  EXPECT_THROW(session.set_move_ramp_s(std::nan("")), InputError);
+  const double ramp = 0.03;
+  session.set_move_ramp_s(ramp);
+  EXPECT_EQ(session.move_ramp_s(), ramp);
+  const int grab = session.begin_tool({&tool_type("grab"), 2.5, {}, {42, -15, 35}});
+  session.advance_events(30);
+  // 3 mm in one message: at the next step's end, 17 m/s.
+  const double t_move = session.time();
+  session.move_tool(grab, {42, -15, 32});
+  while (session.time() < t_move + 2 * ramp) ASSERT_FALSE(session.advance_events(1).stopped) << session.stopped_message();
+  session.end_tool(grab);
+  session.advance_events(50);
+  const Trajectory live = session.trajectory();
+  ASSERT_EQ(live.sphere_count(), 1);
+  int during = 0;
+  for (int64_t f = 0; f < live.frame_count(); ++f) {
+    const double t = live.time[static_cast<size_t>(f)], z = live.spheres[4 * static_cast<size_t>(f) + 2];
+    if (t <= t_move) {
+      EXPECT_NEAR(z, 35, 1e-9) << f;
+    } else if (t < t_move + ramp) {
+      EXPECT_NEAR(z, 35 - 3 * (t - t_move) / ramp, 1e-9) << f;  // on its way
+      EXPECT_GT(z, 32.01) << f;
+      ++during;
+    } else if (live.spheres[4 * static_cast<size_t>(f) + 3] > 0) {
+      EXPECT_NEAR(z, 32, 1e-9) << f;
+    }
+  }
+  EXPECT_GE(during, 2);  // frames every 0.01 s over a 0.03 s ramp
+  expect_replays(session, dir.path(), "ramp");
+}
+
+// A ramp under way when the model becomes unstable ends at the frame the session goes back to, where
+// it had brought the tool; the frames up to it are those shown (to float rounding) and replay.
+TEST(LiveSession, ARampUnderWayWhenTheModelStopsEndsAtTheFrameBefore) {
+  TempDir dir;
+  ctsurg::sim::test::write_block_files(dir.path(), 16, 4, 4, 2.0);
+  LiveSession session = session_of(dir.path(), live_bar_text());
+  session.set_move_ramp_s(0.05);
+  const int grab = session.begin_tool({&tool_type("grab"), 2.5, {}, {42, -15, 35}});
+  session.advance_events(30);
+  const double t_move = session.time();
+  session.move_tool(grab, {42, -215, 35});
+  // 200 mm over 0.05 s: the bar gives way after the frame at 0.01 s, mid-ramp.
+  LiveAdvance r;
+  Trajectory shown = session.trajectory();
+  for (int k = 0; k < 2000 && !r.stopped; ++k) {
+    r = session.advance_events(1);
+    if (r.frames > 0 && !r.stopped) shown = session.trajectory();
+  }
+  ASSERT_TRUE(r.stopped);
+  EXPECT_NE(session.stopped_message().find("unstable"), std::string::npos) << session.stopped_message();
+  const double t_frame = session.time();
+  ASSERT_GT(t_frame, t_move);
+  ASSERT_LT(t_frame, t_move + 0.05);
+  // The frames kept are those shown, to float rounding.
+  const Trajectory kept = session.trajectory();
+  ASSERT_EQ(kept.frame_count(), shown.frame_count());
+  EXPECT_EQ(kept.time, shown.time);
+  ASSERT_EQ(kept.vertices.size(), shown.vertices.size());
+  for (size_t i = 0; i < kept.vertices.size(); ++i) ASSERT_NEAR(kept.vertices[i], shown.vertices[i], 1e-4) << i;
+  // The grab's path ends at the frame, where the ramp had brought it (linearly from t_move).
+  const Scenario saved = parse_scenario(session.scenario_text("x.h5"), dir.path() / "x.yaml", dir.path());
+  const Keyframe& last = saved.tools.back().path.back();
+  EXPECT_EQ(last.t, t_frame);
+  EXPECT_NEAR(last.point.value[1], -15 - 200 * (t_frame - t_move) / 0.05, 1e-9);
+  EXPECT_EQ(last.point.value[2], 35);
+  // The grab still holds; the session goes on from there and replays.
+  EXPECT_TRUE(session.tool_active(grab));
+  session.resume();
+  session.move_tool(grab, {42, -20, 35});
+  ASSERT_FALSE(session.advance_events(300).stopped) << session.stopped_message();
+  expect_replays(session, dir.path(), "ramp_cut");
 }

@@ -11,9 +11,12 @@
 // queued and applied at the next event boundary, between two advances of the loop. A boundary at time
 // t whose next event ends at t1 (ScenarioLoop::next_time(): t + dt) turns them into the timeline's
 // terms: a tool begun there has start_s = t1 and a keyframe (t1, position); a move adds a keyframe
-// (t, the position it had) unless its last keyframe is at t, then (t1, new position) (a second move
-// at the same boundary replaces it); an end sets end_s = t1 (a tool begun and ended at one boundary
-// acts for one event). Linear interpolation between keyframes at step times then gives exactly the
+// (t, the position it had) unless its last keyframe is at t, then (max(t1, t + move_ramp_s()), new
+// position) (a second move at the same boundary replaces it); an end sets end_s = t1 (a tool begun and
+// ended at one boundary acts for one event). The ramp (set_move_ramp_s; ctsurg-live sets one picture
+// tick of simulated time) lets a tool travel between two of the page's messages instead of jumping in
+// one step: a fast mouse moves 3 mm between messages, which in one 0.17 ms step of the spring bar is
+// 17 m/s and trips the stability guard. Events queued during a ramp wait until it ends (below). Linear interpolation between keyframes at step times then gives exactly the
 // positions the user gave (a + 0 * (b - a) = a in floating point; at and after the last key, the key
 // itself), so the runner, reading the same keyframes, computes the same ToolInputs at every step, the
 // same blade sweeps and the same idle intervals (batching); the loop is shared, so the stability checks,
@@ -25,7 +28,9 @@
 // loop is back past the user's last keyframe (that part of the recording is already written). Beyond
 // that, or when the engine refuses a tool (a grab that holds no free particle), the session goes back
 // to its last frame, drops the tool events after it, pauses and keeps the message (stopped_message()):
-// "the state before it". Going back rebuilds the engine and replays the recording up to that frame
+// "the state before it". A ramp under way at that frame is cut there: it ends at the frame, at the
+// position it had reached (interpolated, so the frames replayed up to it may differ from those shown
+// in the last bits of float rounding; without a ramp they are the same bits). Going back rebuilds the engine and replays the recording up to that frame
 // (deterministic, so the state is the one it had; it costs the time the session has run, at batch
 // speed). Tool ids past the tools kept are given out again.
 //
@@ -95,6 +100,10 @@ class LiveSession {
   void move_tool(int id, const std::array<double, 3>& position_mm);
   void end_tool(int id);
   bool tool_active(int id) const;  // begun and not ended (pending events included)
+  // Simulated seconds over which a move reaches its position (above); 0, the default: at the next
+  // event's end. InputError unless finite and >= 0.
+  void set_move_ramp_s(double seconds);
+  double move_ramp_s() const { return move_ramp_s_; }
 
   void pause() { paused_ = true; }
   void resume();  // also clears a stop
@@ -158,6 +167,7 @@ class LiveSession {
   std::unique_ptr<ScenarioLoop> loop_;
   std::vector<bool> ended_;  // per user tool (by id): an end was queued or applied
   double last_frame_time_ = 0;  // s, the last recorded frame's
+  double move_ramp_s_ = 0;      // s, set_move_ramp_s
   std::vector<Pending> pending_;
   bool paused_ = false;
   std::string restart_message_, stopped_message_;
