@@ -14,6 +14,7 @@
 #include "ctsurg/core/xdmf_sidecar.h"
 #include "ctsurg/mesh/tet_mesh_export.h"
 #include "ctsurg/mesh/tet_mesh_import.h"
+#include "ctsurg/mesh/tet_mesh_refinement.h"
 #include "ctsurg/mesh/tetrahedral_meshing.h"
 
 #include <spdlog/spdlog.h>
@@ -59,6 +60,7 @@ int main(int argc, char** argv) {
   std::vector<std::string> files;
   ctsurg::TetMeshingOptions options;
   int64_t max_cells = 5'000'000;
+  int refine = 0;
   CLI::Option* cell_opt = nullptr;
   CLI::Option* facet_opt = nullptr;
   CLI::Option* distance_opt = nullptr;
@@ -69,14 +71,19 @@ int main(int argc, char** argv) {
       "/mask (default) or the /grid/label lattice. Several labels give one subdomain each with conforming "
       "interfaces. Output by suffix: .h5 (ctsurg tet mesh + XDMF), .vtu, .msh (Gmsh 4.1), .mesh (Medit); LPS mm. "
       "Criteria default to the grid's cell size. With --import MESH OUTPUT: a tet mesh from another mesher "
-      "(.vtu ascii, .msh Gmsh 2.2/4.1 ASCII, .mesh Medit), checked and reoriented, with boundary faces and quality.",
+      "(.vtu ascii, .msh Gmsh 2.2/4.1 ASCII, .mesh Medit), checked and reoriented, with boundary faces and quality, "
+      "or a ctsurg .h5 tet mesh. --refine N splits every tet into eight N times (nested meshes of one domain).",
       [&](CLI::App& app) {
         app.add_option("files", files, "GRID.h5 (occupancy grid from ctsurg-grid; not with --import) OUTPUT (.h5, .vtu, .msh or .mesh)")
             ->required()
             ->expected(1, 2);
         app.add_option("--import", import_path,
                        "Read this tet mesh instead of meshing a grid: .vtu (ascii arrays), .msh (Gmsh 2.2/4.1 ASCII), "
-                       ".mesh (Medit ASCII); LPS mm");
+                       ".mesh (Medit ASCII), or a ctsurg tet mesh (.h5, to refine it); LPS mm");
+        app.add_option("--refine", refine,
+                       "Split every tet into eight at its edges' midpoints this many times (0 .. 4, default 0): nested "
+                       "meshes of the same domain and boundary, 8x the tets each time")
+            ->check(CLI::Range(0, 4));
         app.add_option("--source", source, "Labels to mesh: mask (full resolution, default) or grid (/grid/label)")
             ->check(CLI::IsMember({"mask", "grid"}));
         app.add_option("--labels", labels_text, "Comma-separated labels to mesh (default: every non-zero label)");
@@ -128,7 +135,20 @@ int main(int argc, char** argv) {
         options.optimiser = optimiser == "odt"     ? ctsurg::TetOptimiser::odt
                             : optimiser == "lloyd" ? ctsurg::TetOptimiser::lloyd
                                                    : ctsurg::TetOptimiser::none;
-        const auto write = [&](const ctsurg::TetMesh& mesh, const std::string& source_file) {
+        const auto write = [&](const ctsurg::TetMesh& meshed, const std::string& source_file) {
+          ctsurg::TetMesh refined;
+          if (refine > 0) {
+            const int64_t tets = meshed.tet_count() << (3 * refine);
+            if (tets > max_cells) {
+              throw ctsurg::InputError("--refine", "", fmt::format("{} refinements of {} tets give {} tets, over --max-cells {}",
+                                                                   refine, meshed.tet_count(), tets, max_cells));
+            }
+            ctsurg::check_allocation(static_cast<uint64_t>(tets), 250, source_file, fmt::format("--refine {}", refine));
+            refined = ctsurg::refine_tet_mesh_uniformly(meshed, refine);
+            spdlog::info("refined {} times: {} nodes, {} tets", refine, refined.node_count(), refined.tet_count());
+            log_quality(refined, import_path.empty());
+          }
+          const ctsurg::TetMesh& mesh = refine > 0 ? refined : meshed;
           if (h5) {
             ctsurg::Provenance provenance{ctx.name, ctsurg::kVersion, ctx.command_line, {}, nlohmann::json::array()};
             provenance.add_input(source_file);
@@ -145,6 +165,14 @@ int main(int argc, char** argv) {
           ctsurg::check_output_paths(h5 ? std::vector<fs::path>{out_path, ctsurg::xdmf_path_for(out_path)}
                                         : std::vector<fs::path>{out_path},
                                      {fs::path(import_path)});
+          const std::string in_ext = fs::path(import_path).extension().string();
+          if (in_ext == ".h5" || in_ext == ".hdf5") {
+            const ctsurg::TetMesh mesh = ctsurg::read_tet_mesh_file(import_path);
+            spdlog::info("{}: ctsurg tet mesh", import_path);
+            log_quality(mesh, false);
+            write(mesh, import_path);
+            return;
+          }
           const ctsurg::TetMeshImport imported = ctsurg::import_tet_mesh(import_path);
           spdlog::info("{}: {} tet mesh", import_path, imported.format);
           if (imported.flipped > 0) {

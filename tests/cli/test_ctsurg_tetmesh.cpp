@@ -1,6 +1,6 @@
 // ctsurg-tetmesh as a user runs it: an occupancy grid of a ball (full-resolution mask and grid
 // labels) written with write_occupancy_grid_file, then the tool's .h5 / .vtu / .msh / .mesh outputs,
-// byte-identical reruns and bad-input handling (exit 2, a message naming the problem, no file left).
+// uniform refinement (--refine), byte-identical reruns and bad-input handling (exit 2, a message naming the problem, no file left).
 #include "ctsurg/core/occupancy_grid_file.h"
 #include "ctsurg/core/provenance.h"
 #include "ctsurg/core/tet_mesh_file.h"
@@ -133,6 +133,42 @@ TEST(CtsurgTetmesh, ImportsAnotherMeshersFile) {
   EXPECT_NE(bad.output.find("bad.mesh: tet 1: node index 7 out of range"), std::string::npos) << bad.output;
   const auto usage = run_tool("ctsurg-tetmesh", {"--import", (dir / "two.msh").string(), "g.h5", (dir / "x.h5").string()});
   EXPECT_EQ(usage.exit_code, 2) << usage.output;
+  EXPECT_EQ(ctsurg::test::files_in(dir.path()), before);
+}
+
+// --refine: a mesh refined uniformly (every tet into eight), from the grid or from a ctsurg .h5 tet
+// mesh; the same volume and skin, 8x the tets; too many tets refused before any is made.
+TEST(CtsurgTetmesh, RefinesAMeshUniformly) {
+  TempDir dir;
+  const fs::path grid = write_tet_grid(dir, "g.h5");
+  ASSERT_EQ(run_tool("ctsurg-tetmesh", {grid.string(), (dir / "coarse.h5").string(), "--cell-size", "3"}).exit_code, 0);
+  const auto coarse = ctsurg::read_tet_mesh_file(dir / "coarse.h5");
+  const auto r = run_tool("ctsurg-tetmesh", {"--import", (dir / "coarse.h5").string(), "--refine", "2", (dir / "fine.h5").string()});
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("refined 2 times"), std::string::npos) << r.output;
+  const auto fine = ctsurg::read_tet_mesh_file(dir / "fine.h5");
+  EXPECT_EQ(fine.tet_count(), 64 * coarse.tet_count());
+  EXPECT_EQ(fine.boundary_face_count(), 16 * coarse.boundary_face_count());
+  EXPECT_EQ(fine.quality.inverted, 0);
+  EXPECT_NEAR(fine.quality.volume_mm3, coarse.quality.volume_mm3, 1e-9 * coarse.quality.volume_mm3);
+  EXPECT_EQ(fine.mask_volume_mm3, coarse.mask_volume_mm3);
+  EXPECT_NE(fine.criteria.find("\"refinements\":2"), std::string::npos) << fine.criteria;
+  EXPECT_NE(fine.criteria.find("\"cell_size_mm\":3.0"), std::string::npos) << fine.criteria;
+  // Straight from the grid: the same as meshing, then refining once.
+  ASSERT_EQ(run_tool("ctsurg-tetmesh", {grid.string(), (dir / "direct.h5").string(), "--cell-size", "3", "--refine", "1"}).exit_code, 0);
+  ASSERT_EQ(run_tool("ctsurg-tetmesh", {"--import", (dir / "coarse.h5").string(), "--refine", "1", (dir / "once.h5").string()}).exit_code, 0);
+  const auto direct = ctsurg::read_tet_mesh_file(dir / "direct.h5"), once = ctsurg::read_tet_mesh_file(dir / "once.h5");
+  EXPECT_EQ(direct.nodes, once.nodes);
+  EXPECT_EQ(direct.tets, once.tets);
+  // Refused, nothing written: out of range, or over --max-cells.
+  const auto before = ctsurg::test::files_in(dir.path());
+  const auto range = run_tool("ctsurg-tetmesh", {"--import", (dir / "coarse.h5").string(), "--refine", "5", (dir / "x.h5").string()});
+  EXPECT_EQ(range.exit_code, 2) << range.output;
+  EXPECT_NE(range.output.find("--refine"), std::string::npos) << range.output;
+  const auto big = run_tool("ctsurg-tetmesh", {"--import", (dir / "coarse.h5").string(), "--refine", "3", "--max-cells", "1000",
+                                               (dir / "x.h5").string()});
+  EXPECT_EQ(big.exit_code, 2) << big.output;
+  EXPECT_NE(big.output.find("over --max-cells 1000"), std::string::npos) << big.output;
   EXPECT_EQ(ctsurg::test::files_in(dir.path()), before);
 }
 
