@@ -132,7 +132,8 @@ bool FemNewton::quasi_newton(std::vector<double>& u, double s, FemStaticReport& 
     double slope = lifting ? 0.0 : r.dot(d);  // -dE/dalpha at 0
     if (!lifting && !(slope > 0) && !pairs.empty()) {  // not a descent direction: restart from H_0
       pairs.clear();
-      cholesky_->solve_single(r.data(), d.data(), threads_);
+      q = r;
+      two_loop(q, d);
       slope = r.dot(d);
     }
     rep.solve_seconds += seconds_since(t0);
