@@ -20,6 +20,8 @@
 # then gives the observed order of each sequence, the Richardson-extrapolated surface (the reference) and
 # its estimated error, and every case's distance from it. Results: OUT/nested_convergence.md (copied
 # into docs/accuracy.md "The live mesh's own error" by hand, with the machine and date).
+# What sets the P1 error on these meshes (locking or cells through the walls): bench/linear_tet_error.py
+# OUT/mesh0.h5 OUT/mesh1.h5 OUT/mesh2.h5 (docs/accuracy.md "What sets the linear tets' error").
 set -euo pipefail
 cd "$(dirname "$0")/.."
 BUILD=${1:-build}
