@@ -187,7 +187,13 @@ void FemToolHolds::update_grips(const std::vector<ToolInput>& tools, double t, c
   }
 }
 
-void FemToolHolds::add_shared_force(const std::vector<int32_t>& nodes, const Vec3& force_n, std::vector<double>& out) const {
+void FemToolHolds::add_shared_force(const Hold& hold, const Vec3& force_n, std::vector<double>& out) const {
+  const std::vector<int32_t>& nodes = hold.nodes;
+  if (!hold.weights.empty()) {
+    for (size_t k = 0; k < nodes.size(); ++k)
+      for (size_t a = 0; a < 3; ++a) out[3 * static_cast<size_t>(nodes[k]) + a] += force_n[a] * 1e6 * hold.weights[k];  // N -> uN
+    return;
+  }
   for (size_t a = 0; a < 3; ++a) {
     // The component along axis a is shared by the nodes free in a (all of them unless some are held in a).
     size_t free_in_a = 0;
@@ -197,6 +203,29 @@ void FemToolHolds::add_shared_force(const std::vector<int32_t>& nodes, const Vec
     for (const int32_t n : nodes)
       if (!((held_axes_[static_cast<size_t>(n)] >> a) & 1u)) out[3 * static_cast<size_t>(n) + a] += force_n[a] * share;
   }
+}
+
+// The hold's nodes and weights from a grip captured at k = 1: m_a = sum over its elements of row a of
+// their matrices (integral of w N_a N_b summed over b = integral of w N_a, the shape functions summing to
+// one), normalised by their sum (the weighted volume). Empty when the grip covers nothing.
+void FemToolHolds::spread_over_volume(const FemGrip& region, Hold& hold) {
+  hold.nodes.clear();
+  hold.weights.clear();
+  if (region.elements.empty()) return;
+  const size_t npe = static_cast<size_t>(model_.nodes_per_element());
+  std::vector<double> m(region.nodes.size(), 0.0);
+  for (size_t e = 0; e < region.elements.size(); ++e)
+    for (size_t a = 0; a < npe; ++a) {
+      double row = 0;
+      for (size_t b = 0; b < npe; ++b) row += region.matrices[(e * npe + a) * npe + b];
+      m[static_cast<size_t>(region.element_nodes[e * npe + a])] += row;
+    }
+  double total = 0;
+  for (const double x : m) total += x;
+  if (!(total > 0)) return;
+  hold.nodes = region.nodes;
+  hold.weights.resize(m.size());
+  for (size_t k = 0; k < m.size(); ++k) hold.weights[k] = m[k] / total;
 }
 
 bool FemToolHolds::load(size_t tool, const std::vector<double>& u, const std::vector<double>* reactions, std::array<double, 6>& out) const {
@@ -211,7 +240,7 @@ bool FemToolHolds::load(size_t tool, const std::vector<double>& u, const std::ve
   std::vector<double> shared;
   if (h.force) {
     shared.assign(u.size(), 0.0);
-    add_shared_force(h.nodes, h.force_n, shared);
+    add_shared_force(h, h.force_n, shared);
   } else if (reactions == nullptr || reactions->size() != u.size()) {
     return false;
   }
@@ -229,16 +258,28 @@ bool FemToolHolds::update_forces(const std::vector<ToolInput>& tools, const std:
     f.force_n = tool.force_n;
     if (f.nodes.empty() && !f.released && tool.active) {
       f.force = true;
-      f.nodes = free_nodes_in_sphere(model_, u, held_axes_, capture_at_start ? tool.start_centre : tool.centre, tool.radius_mm);
-      if (f.nodes.empty()) {
-        throw InputError(where_, tool.label,
-                         "the force's sphere holds no free node; move it onto the tissue or set snap_to_tissue: true");
+      const Vec3& centre = capture_at_start ? tool.start_centre : tool.centre;
+      if (tool.grip == HoldGrip::volume) {
+        const double edge = tool.grip_edge_mm > 0 ? tool.grip_edge_mm : tool.radius_mm / 4;
+        if (!(edge <= tool.radius_mm)) throw InputError(where_, tool.label, "a volume force needs grip_edge_mm in (0, radius]");
+        spread_over_volume(fem_capture_grip(model_, u, centre, tool.radius_mm, edge, 1.0), f);
+        if (f.nodes.empty()) {
+          throw InputError(where_, tool.label,
+                           "the force's sphere holds no material; move it onto the tissue or set snap_to_tissue: true");
+        }
+      } else {
+        f.nodes = free_nodes_in_sphere(model_, u, held_axes_, centre, tool.radius_mm);
+        if (f.nodes.empty()) {
+          throw InputError(where_, tool.label,
+                           "the force's sphere holds no free node; move it onto the tissue or set snap_to_tissue: true");
+        }
       }
-      if (note_) note_(tool.label + ": force shared by " + std::to_string(f.nodes.size()) + " nodes");
+      if (note_) note_(tool.label + ": force shared by " + std::to_string(f.nodes.size()) + " nodes" + (f.weights.empty() ? "" : " by volume"));
       changed = true;
     }
     if (!f.nodes.empty() && !tool.active) {
       f.nodes.clear();
+      f.weights.clear();
       f.released = true;
       changed = true;
     }
@@ -249,7 +290,7 @@ bool FemToolHolds::update_forces(const std::vector<ToolInput>& tools, const std:
     if (tools[i].acts != ToolPrimitive::load || !engaged(i)) continue;
     const Hold& f = holds_[i];
     if (nodal_forces_.empty()) nodal_forces_.assign(static_cast<size_t>(3 * model_.node_count()), 0.0);
-    add_shared_force(f.nodes, tools[i].force_n, nodal_forces_);
+    add_shared_force(f, tools[i].force_n, nodal_forces_);
   }
   return true;
 }

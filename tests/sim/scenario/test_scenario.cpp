@@ -587,3 +587,38 @@ TEST(Scenario, EveryRegisteredToolHasAParserAndAName) {
     EXPECT_NE(std::string(e.what()).find("unknown tool 'laser' (the tools are grab, clamp, probe"), std::string::npos) << e.what();
   }
 }
+
+// A force's grip: volume spreads it over the material (fem/fem_tools.h): kind fem only, with any solver
+// (no penalty: the explicit dynamics takes it too); grip_edge_mm with it only; a force has no penalty to
+// set (grip_stiffness_ratio is not its key).
+TEST(Scenario, AForceSpreadOverTheVolumeIsForTheFemOnly) {
+  const std::string force = R"(
+  - force:
+      radius_mm: 6
+      force_n: [0, 0, 0.2]
+      grip: volume
+      grip_edge_mm: 2
+      start_s: 0.1
+      path:
+        - {t: 0.1, position_mm: [20, -15, 40]}
+time:)";
+  const std::string springs = replaced(kFull, "\ntime:", force);
+  EXPECT_NE(error_of(springs).find("s.yaml: tools[2].force.grip: volume needs kind: fem (the spring and vessel models load particles)"),
+            std::string::npos)
+      << error_of(springs);
+  const std::string fem =
+      replaced(replaced(springs, "kind: spring_grid", "kind: fem\n  tetmesh: t.h5\n  solver: dynamic"), "  coupling: nearest_particle\n", "");
+  const std::string fem_no_cut = replaced(fem, "  - cut:\n      blade_edge_mm: [0, 0, 20]\n      path:\n        - {t: 0.2, position_mm: [1, 2, 3]}\n"
+                                               "        - {t: 0.3, position_mm: [11, 2, 3]}\n", "");
+  const auto s = parse_scenario(fem_no_cut, "s.yaml", "/base");
+  ASSERT_EQ(s.tools.size(), 2u);
+  EXPECT_EQ(s.tools[1].acts(), ctsurg::sim::ToolPrimitive::load);
+  EXPECT_EQ(s.tools[1].grip, ctsurg::sim::HoldGrip::volume);
+  EXPECT_DOUBLE_EQ(s.tools[1].grip_edge_mm, 2);
+  EXPECT_NE(error_of(replaced(fem_no_cut, "grip_edge_mm: 2", "grip_edge_mm: 7")).find("tools[1].force.grip_edge_mm: must be <= radius_mm"),
+            std::string::npos);
+  EXPECT_NE(error_of(replaced(fem_no_cut, "      grip: volume\n", "")).find("tools[1].force.grip_edge_mm: applies to grip: volume only"),
+            std::string::npos);
+  EXPECT_NE(error_of(replaced(fem_no_cut, "grip_edge_mm: 2", "grip_stiffness_ratio: 10")).find("tools[1].force.grip_stiffness_ratio: unknown key"),
+            std::string::npos);
+}

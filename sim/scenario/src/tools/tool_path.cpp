@@ -61,11 +61,14 @@ void read_tool_path(const YamlField& f, ToolAction& t, bool rotations, const std
   if (f.has("snap_to_tissue")) t.snap_to_tissue = f.child("snap_to_tissue").boolean();
 }
 
-void read_grip(const YamlField& f, const Scenario& s, ToolAction& t) {
+void read_grip(const YamlField& f, const Scenario& s, ToolAction& t, bool penalty) {
   if (f.has("grip")) {
     const YamlField g = f.child("grip");
     t.grip = g.one_of({"nodes", "volume"}) == "volume" ? HoldGrip::volume : HoldGrip::nodes;
-    if (t.grip == HoldGrip::volume && (s.model != ModelKind::fem || s.fem_solver == FemSolver::dynamic)) {
+    if (t.grip == HoldGrip::volume && !penalty && s.model != ModelKind::fem) {
+      g.fail("volume needs kind: fem (the spring and vessel models load particles)");
+    }
+    if (t.grip == HoldGrip::volume && penalty && (s.model != ModelKind::fem || s.fem_solver == FemSolver::dynamic)) {
       g.fail("volume needs kind: fem with solver static_equilibrium or implicit (its penalty is stiff for the explicit dynamics; "
              "the spring and vessel models hold particles)");
     }

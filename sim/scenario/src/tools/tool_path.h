@@ -21,10 +21,12 @@ std::vector<std::string> path_tool_fields(std::initializer_list<const char*> own
 // when that is not empty.
 void read_tool_path(const YamlField& f, ToolAction& t, bool rotations, const std::string& rotation_refusal = "");
 
-// The hold tools' grip fields (grab, clamp): grip (nodes | volume), grip_stiffness_ratio, grip_edge_mm.
-// A volume grip needs kind: fem with solver static_equilibrium or implicit (fails on the field otherwise).
+// The grip fields: grip (nodes | volume), grip_edge_mm and, for the hold tools (grab, clamp: `penalty`),
+// grip_stiffness_ratio. A hold's volume grip is a penalty: it needs kind: fem with solver
+// static_equilibrium or implicit; a force's (not `penalty`) spreads a load: kind: fem, any solver (fails
+// on the field otherwise).
 inline constexpr const char* kGripFields[] = {"grip", "grip_stiffness_ratio", "grip_edge_mm"};
-void read_grip(const YamlField& f, const Scenario& s, ToolAction& t);
+void read_grip(const YamlField& f, const Scenario& s, ToolAction& t, bool penalty = true);
 
 // A tool that pushes the tissue (probe, instrument) on kind: fem needs the explicit dynamics (contact is
 // part of no other solver): fails on `item` naming the tool otherwise.

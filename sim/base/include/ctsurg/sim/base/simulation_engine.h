@@ -87,10 +87,11 @@ struct ToolInput {
   std::vector<std::string> stitch_fields;
   double stitch_target_mm = 0;                   // mm, >= 0
   double stitch_stiffness_ratio = 1;             // x the model's stiffest spring (> 0)
-  HoldGrip grip = HoldGrip::nodes;      // hold: what it captures (above)
+  HoldGrip grip = HoldGrip::nodes;      // hold: what it captures (above); load: what shares its force (volume:
+                                        //   the material inside by volume, fem/fem_tools.h)
   double grip_stiffness_ratio = 1000;   // hold, volume: the penalty per volume, x E / radius^2 (E: the stiffest
                                         //   material it holds), > 0
-  double grip_edge_mm = 0;              // hold, volume: the width of the band over which the grip fades at its
+  double grip_edge_mm = 0;              // hold, load, volume: the width of the band over which the grip fades at its
                                         //   radius, mm, (0, radius]; 0: radius / 4
   double local_region_mm = 0;  // hold, load on an FEM local region (fem_local_region.h): this tool's region
                                // radius, mm; 0: the engine's

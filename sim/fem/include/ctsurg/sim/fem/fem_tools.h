@@ -14,6 +14,11 @@
 //          travel since; static and implicit solvers take it as a load (FemLoads::grips).
 //   force  a total force (N) shared equally by the free nodes inside its sphere when it starts, as
 //          nodal forces (uN) until it ends (the FEM paper's point load, Huang et al. section 5).
+//   force with grip: volume spreads it over the material inside its sphere instead, as a body force of
+//          uniform density F / V_w: node a carries F m_a / sum m, m_a = integral of w N_a dV over the
+//          elements (the volume grip's weight w and quadrature, fem_grip.h: the row sums of its P at
+//          k = 1), so the load converges as the mesh is refined where a node count changes with it. A
+//          node held in some axis carries its share there too (its support takes it); any solver.
 //
 // A quasi-static engine captures where the tool was when its window opened (ToolInput::start_centre,
 // start_s); a dynamic one where it is at the step it first is active. Both take the displacement the
@@ -90,11 +95,15 @@ class FemToolHolds {
     FemGrip grip;                   // a volume grip's (its elements empty before the capture and after release)
     bool force = false;             // a force tool's hold (its nodes are loaded, not held)
     Vec3 force_n{0, 0, 0};          // a force tool's total force, N
+    std::vector<double> weights;    // a volume force's share of the force per node of `nodes` (sums to 1);
+                                    //   empty: equal shares among the nodes free in each axis
   };
   Hold& hold(size_t tool);
+  void spread_over_volume(const FemGrip& region, Hold& hold);
   std::vector<int32_t> capture(const ToolInput& tool, const Vec3& centre, const std::vector<double>& u) const;
-  // out (#N x 3 uN) += force_n (N) shared equally, axis by axis, by the nodes free in that axis.
-  void add_shared_force(const std::vector<int32_t>& nodes, const Vec3& force_n, std::vector<double>& out) const;
+  // out (#N x 3 uN) += force_n (N) shared by the hold's nodes: by its weights, or equally, axis by axis,
+  // by the nodes free in that axis.
+  void add_shared_force(const Hold& hold, const Vec3& force_n, std::vector<double>& out) const;
 
   const FemModel& model_;
   std::vector<uint8_t> held_axes_;

@@ -92,7 +92,9 @@ struct ToolAction {
   double local_region_mm = 0;
   // grab, clamp: grip nodes (the free nodes inside, held) | volume (the material inside, by a penalty
   // integrated over the elements: kind fem, solver static_equilibrium or implicit; fem/fem_grip.h), its
-  // stiffness ratio (x E / radius^2, > 0) and edge band (mm, (0, radius]; 0: radius / 4).
+  // stiffness ratio (x E / radius^2, > 0) and edge band (mm, (0, radius]; 0: radius / 4). force: grip
+  // nodes (its force shared by the free nodes inside) | volume (spread over the material inside by
+  // volume: kind fem, any solver; fem/fem_tools.h) and the same edge band.
   HoldGrip grip = HoldGrip::nodes;
   double grip_stiffness_ratio = 1000;
   double grip_edge_mm = 0;
