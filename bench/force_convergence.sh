@@ -28,21 +28,11 @@ cmake --build "$BUILD" -j2 --target ctsurg-tetmesh ctsurg-sim >/dev/null
 mkdir -p "$OUT"
 OUT=$(realpath "$OUT")
 KIDNEY=$(realpath "$KIDNEY")
-cp -f "$KIDNEY/tetmesh.h5" "$OUT/mesh0.h5"
-for k in 1 2; do
-  [[ -f $OUT/mesh$k.h5 ]] || "$BIN/ctsurg-tetmesh" -q --import "$OUT/mesh0.h5" --refine "$k" "$OUT/mesh$k.h5"
-done
+source bench/nested_meshes.sh
+nested_meshes "$BIN" "$KIDNEY/tetmesh.h5" "$OUT"
 # The scenario's point (at_fraction (0, 0.5, 0.85) of the nodes' bounds) snapped to the coarse mesh's
 # nearest node, as snap_to_tissue does.
-read -r cx cy cz < <(/usr/bin/python3 - "$OUT/mesh0.h5" <<'PY'
-import sys, h5py, numpy as np
-n = h5py.File(sys.argv[1], "r")["/tetmesh/nodes"][:]
-lo, hi = n.min(0), n.max(0)
-p = lo + np.array([0.0, 0.5, 0.85]) * (hi - lo)
-c = n[np.argmin(((n - p) ** 2).sum(1))]
-print(f"{c[0]!r} {c[1]!r} {c[2]!r}")
-PY
-)
+read -r cx cy cz < <(snapped_node "$OUT/mesh0.h5" 0 0.5 0.85)
 run() {  # run NAME MESH ELEMENTS GRIP
   local name=$1 mesh=$2 elements=$3 grip=$4
   [[ -f $OUT/$name.h5 ]] && return 0

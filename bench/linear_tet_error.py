@@ -248,8 +248,7 @@ def main():
     u = {kind: [] for kind in kinds}
     print(f"nu {nu}: {', '.join(f'{len(m[0]):,}' for m in meshes)} nodes; grab at {np.round(centre, 2)}", file=sys.stderr)
     for level, (nodes, tets) in enumerate(meshes):
-        zcut = lo[2] + 0.85 * (hi[2] - lo[2])
-        fixed = np.repeat(nodes[:, 2] >= zcut, 3)
+        fixed = np.repeat(nodes[:, 2] >= zcut0, 3)
         for kind in kinds:
             k, vol = stiffness(nodes, tets, mu, lam, kind)
             pen = grip(nodes, tets, vol, centre, 1000 * E / RADIUS ** 2)

@@ -35,21 +35,11 @@ cmake --build "$BUILD" -j2 --target ctsurg-tetmesh ctsurg-sim >/dev/null
 mkdir -p "$OUT"
 OUT=$(realpath "$OUT")
 HEART=$(realpath "$HEART")
-cp -f "$HEART/tetmesh.h5" "$OUT/mesh0.h5"
-for k in 1 2; do
-  [[ -f $OUT/mesh$k.h5 ]] || "$BIN/ctsurg-tetmesh" -q --import "$OUT/mesh0.h5" --refine "$k" "$OUT/mesh$k.h5"
-done
+source bench/nested_meshes.sh
+nested_meshes "$BIN" "$HEART/tetmesh.h5" "$OUT"
 # The grab's centre: the 6 mm mesh's node nearest heart_fem_grab.yaml's apex point (at_fraction
 # (0.75, 0, 0.2) of the nodes' bounds, identical on the nested meshes), as its snap_to_tissue finds it.
-read -r cx cy cz < <(/usr/bin/python3 - "$OUT/mesh0.h5" <<'PY'
-import sys, h5py, numpy as np
-n = h5py.File(sys.argv[1], "r")["/tetmesh/nodes"][:]
-lo, hi = n.min(0), n.max(0)
-p = lo + np.array([0.75, 0.0, 0.2]) * (hi - lo)
-c = n[np.argmin(((n - p) ** 2).sum(1))]
-print(f"{c[0]!r} {c[1]!r} {c[2]!r}")
-PY
-)
+read -r cx cy cz < <(snapped_node "$OUT/mesh0.h5" 0.75 0 0.2)
 LIVE_SOLVER=$(/usr/bin/python3 -c 'import yaml,json; print(json.dumps(yaml.safe_load(open("data_samples/scenarios/heart_live.yaml"))["solver"]))')
 LIVE_INTERVAL=$(/usr/bin/python3 -c 'import yaml; print(repr(yaml.safe_load(open("data_samples/scenarios/heart_live.yaml"))["output"]["frame_interval_s"]))')
 # Every 31st of the live run's frames.
